@@ -1,0 +1,27 @@
+// Compute twin of the fat-border vertex expansion: runs `fat_border_position` (from
+// fat_border_lib.wgsl, composed before this file) on a list of inputs so tests can compare the
+// GPU's positions with the Rust CPU twin.
+
+struct TwinInput {
+    prev: vec4<f32>,
+    cur: vec4<f32>,
+    next: vec4<f32>,
+    // xyz: eye, w: ε.
+    eye_eps: vec4<f32>,
+    // x: slot.
+    slot: vec4<u32>,
+};
+
+@group(0) @binding(0) var<storage, read> inputs: array<TwinInput>;
+@group(0) @binding(1) var<storage, read_write> outputs: array<vec4<f32>>;
+
+@compute @workgroup_size(64)
+fn cs_expand(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if (i >= arrayLength(&inputs)) {
+        return;
+    }
+    let q = inputs[i];
+    let p = fat_border_position(q.prev.xyz, q.cur.xyz, q.next.xyz, q.eye_eps.xyz, q.eye_eps.w, q.slot.x);
+    outputs[i] = vec4<f32>(p, 1.0);
+}

@@ -1,0 +1,117 @@
+// Surfaces and fat borders of independently tessellated patches.
+// Composed after fat_border_lib.wgsl (see `render::shaders`).
+
+struct Globals {
+    view_proj: mat4x4<f32>,
+    // xyz: eye position.
+    eye: vec4<f32>,
+    // xyz: unit viewing axis (from the eye towards the target).
+    forward: vec4<f32>,
+    // xyz: unit direction towards the light.
+    light: vec4<f32>,
+    // rgb: base colour for `lit` and `flat` shading.
+    color: vec4<f32>,
+    // x: shading mode (0 lit, 1 flat, 2 ids).
+    mode: vec4<u32>,
+};
+
+@group(0) @binding(0) var<uniform> globals: Globals;
+
+struct VsOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) @interpolate(flat) patch_id: u32,
+    // Where the fragment really is (differs from `world` on fat borders).
+    @location(3) actual: vec3<f32>,
+};
+
+@vertex
+fn vs_surface(
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) patch_id: u32,
+) -> VsOut {
+    var out: VsOut;
+    out.clip = globals.view_proj * vec4<f32>(position, 1.0);
+    out.world = position;
+    out.actual = position;
+    out.normal = normal;
+    out.patch_id = patch_id;
+    return out;
+}
+
+// One instance per border vertex v_i; `code` walks the template of the chosen variant.
+@vertex
+fn vs_border(
+    @location(0) code: u32,
+    @location(1) prev: vec3<f32>,
+    @location(2) a: vec3<f32>,
+    @location(3) b: vec3<f32>,
+    @location(4) c: vec3<f32>,
+    @location(5) normal_a: vec3<f32>,
+    @location(6) normal_b: vec3<f32>,
+    @location(7) eps: f32,
+    @location(8) patch_id: u32,
+) -> VsOut {
+    let end = fb_template_end(code);
+    let slot = fb_template_slot(code);
+    var p: vec3<f32>;
+    var n: vec3<f32>;
+    var source: vec3<f32>;
+    if (end == 0u) {
+        p = fat_border_position(prev, a, b, globals.eye.xyz, eps, slot);
+        n = normal_a;
+        source = a;
+    } else {
+        p = fat_border_position(a, b, c, globals.eye.xyz, eps, slot);
+        n = normal_b;
+        source = b;
+    }
+    var out: VsOut;
+    out.clip = globals.view_proj * vec4<f32>(p, 1.0);
+    // Shading attributes come from the original border vertex (paper, step 6).
+    out.world = source;
+    out.actual = p;
+    out.normal = n;
+    out.patch_id = patch_id;
+    return out;
+}
+
+fn id_color(id: u32) -> vec3<f32> {
+    let h = fract(f32(id) * 0.61803398875 + 0.13);
+    let k = vec3<f32>(5.0, 3.0, 1.0);
+    let p = abs(fract(vec3<f32>(h) + k / 6.0) * 6.0 - vec3<f32>(3.0));
+    let rgb = clamp(p - vec3<f32>(1.0), vec3<f32>(0.0), vec3<f32>(1.0));
+    return mix(vec3<f32>(1.0), rgb, 0.65) * 0.92;
+}
+
+@fragment
+fn fs_color(in: VsOut) -> @location(0) vec4<f32> {
+    let mode = globals.mode.x;
+    if (mode == 1u) {
+        return vec4<f32>(globals.color.rgb, 1.0);
+    }
+    if (mode == 2u) {
+        return vec4<f32>(id_color(in.patch_id), 1.0);
+    }
+    // Two-sided lighting: CAD patches are not consistently oriented.
+    let v = normalize(globals.eye.xyz - in.world);
+    var n = normalize(in.normal);
+    if (dot(n, v) < 0.0) {
+        n = -n;
+    }
+    let l = globals.light.xyz;
+    let diffuse = max(dot(n, l), 0.0);
+    let h = normalize(l + v);
+    let spec = pow(max(dot(n, h), 0.0), 48.0);
+    let base = globals.color.rgb;
+    let rgb = base * (0.22 + 0.78 * diffuse) + vec3<f32>(0.28 * spec);
+    return vec4<f32>(min(rgb, vec3<f32>(1.0)), 1.0);
+}
+
+// Linear view-space depth (distance along the viewing axis), for crack checks and --depth-out.
+@fragment
+fn fs_depth(in: VsOut) -> @location(0) f32 {
+    return dot(in.actual - globals.eye.xyz, globals.forward.xyz);
+}

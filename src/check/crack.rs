@@ -1,0 +1,573 @@
+//! Crack and growth pixels, measured with depth against a watertight reference.
+//!
+//! The **reference** is every patch evaluated on one shared uniform `n × n` parameter grid, fine
+//! enough that each patch is within ε/4 of its surface, with border vertices that coincide
+//! across patches welded to one position: a watertight tessellation whose silhouette and front
+//! depth stand for the true ones.
+//!
+//! The **actual** image is the model tessellated independently per patch (T-junctions and all),
+//! drawn with flat shading, a sentinel background and one sample per pixel, with or without fat
+//! borders. Per pixel, over the `(2r+1)²` neighbourhood N of the pixel in the reference, with
+//! `r = max(1, ⌈γ⌉)` px ([`contour_margin`]: the view lets every surface, silhouettes
+//! included, be off by γ pixels):
+//!
+//! * **inside** — every pixel of N is covered and N holds no occluding contour (its depth range
+//!   is at most what a surface sloping by [`MAX_SLOPE`] pixel sizes per pixel spans): the pixel
+//!   is at least r px inside the true silhouette and r px away from where one surface passes in
+//!   front of another, where the allowed error may legitimately show the surface behind;
+//! * **crack** — inside, and the actual image shows the background, *or* a surface behind the
+//!   farthest reference depth in N by more than `3.25 · ε(depth)`, where
+//!   `ε(depth) = γ · pixel_size(depth)` is the object error the view allows at that depth:
+//!   fat borders are pushed back by ε, the rendered patch and its neighbour each deviate by up to
+//!   ε, and the reference by ε/4. A crack on a closed model usually reveals the far side's
+//!   inside, which lies far behind that tolerance;
+//! * **growth** — the pixel is more than r px outside the true silhouette, yet the actual image
+//!   covers it: fat borders poking out. Its distance to the silhouette is reported.
+
+use std::path::PathBuf;
+
+use glam::{DVec3, Vec3};
+
+use crate::model::Scene;
+use crate::render::{FatBorders, Frame, RenderError, RenderOptions, Renderer, Shading};
+use crate::tessellate::{
+    BezierTessellator, MeshStats, PatchMesh, tessellate_scene, tessellate_scene_uniform,
+};
+use crate::view::View;
+
+/// Tolerance factor on ε for "behind the true front surface" (see module doc).
+pub const DEPTH_TOLERANCE_EPS: f64 = 3.25;
+/// Steepest depth slope (depth per pixel, in pixel sizes) of a surface still treated as
+/// continuous; a larger depth jump within the window is an occluding contour.
+pub const MAX_SLOPE: f64 = 4.0;
+/// The reference is tessellated to this fraction of each patch's ε.
+pub const REFERENCE_EPS_FRACTION: f64 = 0.25;
+/// Upper limit on the reference grid.
+pub const MAX_REFERENCE_GRID: u32 = 256;
+/// Sentinel background for checks (magenta: never a flat-shaded surface colour here).
+pub const SENTINEL: [u8; 3] = [255, 0, 255];
+/// Flat surface colour for checks.
+pub const CHECK_SURFACE: [f32; 3] = [0.5, 0.5, 0.5];
+
+/// Pixel counts for one rendered image.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct CrackCounts {
+    /// Pixels at least 1 px inside the reference silhouette (the population cracks come from).
+    pub inside: usize,
+    /// Inside pixels showing the background.
+    pub background: usize,
+    /// Inside pixels showing a surface behind the true front surface.
+    pub behind: usize,
+    /// Covered pixels more than 1 px outside the reference silhouette.
+    pub growth: usize,
+    /// Largest Chebyshev distance (px) from a growth pixel to the reference silhouette.
+    pub growth_max_px: u32,
+}
+
+impl CrackCounts {
+    pub fn cracks(&self) -> usize {
+        self.background + self.behind
+    }
+}
+
+/// Reference meshes for `view`: a shared uniform grid, welded along shared borders.
+/// Returns the meshes and the grid size.
+pub fn reference_meshes(scene: &Scene, view: &View, pixel_error: f64) -> (Vec<PatchMesh>, u32) {
+    let n = scene
+        .patches
+        .iter()
+        .map(|p| {
+            let eps = view.eps_obj(&p.bounds, pixel_error) * REFERENCE_EPS_FRACTION;
+            let (r, _) = BezierTessellator::resolution_for(&p.surface, eps);
+            r.nu.max(r.nv)
+        })
+        .max()
+        .unwrap_or(1)
+        .clamp(1, MAX_REFERENCE_GRID);
+    let mut meshes = tessellate_scene_uniform(scene, n);
+    weld_borders(&mut meshes, (scene.bounds.radius * 1e-6) as f32);
+    (meshes, n)
+}
+
+/// Moves border vertices of different patches that lie within `tol` of each other onto one
+/// position (the first seen), so shared borders coincide bit for bit.
+pub fn weld_borders(meshes: &mut [PatchMesh], tol: f32) {
+    use std::collections::HashMap;
+    let tol = tol.max(f32::MIN_POSITIVE);
+    let cell = |p: Vec3| ((p / tol).floor()).as_ivec3();
+    let mut grid: HashMap<glam::IVec3, Vec<Vec3>> = HashMap::new();
+    for m in meshes.iter_mut() {
+        let border: Vec<u32> = m.borders.iter().flatten().copied().collect();
+        for k in border {
+            let p = m.positions[k as usize];
+            let c = cell(p);
+            let mut found = None;
+            'search: for dx in -1..=1 {
+                for dy in -1..=1 {
+                    for dz in -1..=1 {
+                        if let Some(list) = grid.get(&(c + glam::IVec3::new(dx, dy, dz))) {
+                            if let Some(q) = list.iter().find(|q| q.distance(p) <= tol) {
+                                found = Some(*q);
+                                break 'search;
+                            }
+                        }
+                    }
+                }
+            }
+            match found {
+                Some(q) => m.positions[k as usize] = q,
+                None => grid.entry(c).or_default().push(p),
+            }
+        }
+    }
+}
+
+/// How far (px) from a silhouette or occluding contour a pixel must be before it has to show
+/// the nearest surface: 1 px, or the pixel error when it is larger — the view allows every
+/// surface, silhouettes included, to be off by that much.
+pub fn contour_margin(pixel_error: f64) -> usize {
+    (pixel_error.ceil() as usize).max(1)
+}
+
+/// Counts crack and growth pixels of `actual` against `reference` (both rendered with depth,
+/// the same view and size). Also returns a mask image: red = background crack, orange = a
+/// surface behind showing, blue = growth.
+pub fn classify(
+    reference: &Frame,
+    actual: &Frame,
+    view: &View,
+    pixel_error: f64,
+    background: [u8; 3],
+) -> (CrackCounts, image::RgbaImage) {
+    let (w, h) = (reference.width as usize, reference.height as usize);
+    let empty = Vec::new();
+    let rd = reference.depth.as_ref().unwrap_or(&empty);
+    let ad = actual.depth.as_ref().unwrap_or(&empty);
+    let mut mask = image::RgbaImage::new(w as u32, h as u32);
+    let mut counts = CrackCounts::default();
+    if rd.len() != w * h || ad.len() != w * h || actual.width as usize != w {
+        return (counts, mask);
+    }
+    let r = contour_margin(pixel_error);
+    // Over the (2r+1)² window: is every pixel covered, and the farthest covered depth.
+    let cover: Vec<f32> = rd
+        .iter()
+        .map(|z| if z.is_finite() { 1.0 } else { 0.0 })
+        .collect();
+    let all_covered = window_filter(&cover, w, h, r, f32::min, 0.0);
+    let depth0: Vec<f32> = rd
+        .iter()
+        .map(|z| if z.is_finite() { *z } else { 0.0 })
+        .collect();
+    let farthest = window_filter(&depth0, w, h, r, f32::max, 0.0);
+    let nearest = window_filter(rd, w, h, r, f32::min, f32::INFINITY);
+    let dist = silhouette_distance(rd, w, h);
+    for y in 0..h {
+        for x in 0..w {
+            let i = y * w + x;
+            let px = actual.pixel(x as u32, y as u32);
+            let actual_bg = px[..3] == background;
+            let gray = ((px[0] as u16 + px[1] as u16 + px[2] as u16) / 6) as u8;
+            let mut colour = [gray, gray, gray];
+            let far = farthest[i] as f64;
+            let pixel = view.pixel_size_at(far);
+            let continuous = far - (nearest[i] as f64) <= MAX_SLOPE * (2 * r) as f64 * pixel;
+            if all_covered[i] > 0.5 && continuous {
+                counts.inside += 1;
+                let tol = DEPTH_TOLERANCE_EPS * pixel_error * pixel;
+                if actual_bg {
+                    counts.background += 1;
+                    colour = [255, 0, 0];
+                } else if ad[i] as f64 > far + tol {
+                    counts.behind += 1;
+                    colour = [255, 140, 0];
+                }
+            } else if dist[i] as usize > r && !actual_bg {
+                counts.growth += 1;
+                counts.growth_max_px = counts.growth_max_px.max(dist[i]);
+                colour = [0, 80, 255];
+            }
+            mask.put_pixel(
+                x as u32,
+                y as u32,
+                image::Rgba([colour[0], colour[1], colour[2], 255]),
+            );
+        }
+    }
+    (counts, mask)
+}
+
+/// Separable min/max filter over a (2r+1)² window; pixels outside the image count as `outside`.
+fn window_filter(
+    src: &[f32],
+    w: usize,
+    h: usize,
+    r: usize,
+    op: fn(f32, f32) -> f32,
+    outside: f32,
+) -> Vec<f32> {
+    let mut tmp = vec![0.0; w * h];
+    for y in 0..h {
+        for x in 0..w {
+            let mut v = if x < r || x + r >= w {
+                outside
+            } else {
+                src[y * w + x]
+            };
+            for xx in x.saturating_sub(r)..=(x + r).min(w - 1) {
+                v = op(v, src[y * w + xx]);
+            }
+            tmp[y * w + x] = v;
+        }
+    }
+    let mut out = vec![0.0; w * h];
+    for y in 0..h {
+        for x in 0..w {
+            let mut v = if y < r || y + r >= h {
+                outside
+            } else {
+                tmp[y * w + x]
+            };
+            for yy in y.saturating_sub(r)..=(y + r).min(h - 1) {
+                v = op(v, tmp[yy * w + x]);
+            }
+            out[y * w + x] = v;
+        }
+    }
+    out
+}
+
+/// Chebyshev distance (px) of every pixel to the nearest covered reference pixel (0 on it).
+fn silhouette_distance(depth: &[f32], w: usize, h: usize) -> Vec<u32> {
+    let big = (w + h) as u32;
+    let mut d: Vec<u32> = depth
+        .iter()
+        .map(|z| if z.is_finite() { 0 } else { big })
+        .collect();
+    for y in 0..h {
+        for x in 0..w {
+            let mut v = d[y * w + x];
+            if x > 0 {
+                v = v.min(d[y * w + x - 1] + 1);
+            }
+            if y > 0 {
+                v = v.min(d[(y - 1) * w + x] + 1);
+                if x > 0 {
+                    v = v.min(d[(y - 1) * w + x - 1] + 1);
+                }
+                if x + 1 < w {
+                    v = v.min(d[(y - 1) * w + x + 1] + 1);
+                }
+            }
+            d[y * w + x] = v;
+        }
+    }
+    for y in (0..h).rev() {
+        for x in (0..w).rev() {
+            let mut v = d[y * w + x];
+            if x + 1 < w {
+                v = v.min(d[y * w + x + 1] + 1);
+            }
+            if y + 1 < h {
+                v = v.min(d[(y + 1) * w + x] + 1);
+                if x + 1 < w {
+                    v = v.min(d[(y + 1) * w + x + 1] + 1);
+                }
+                if x > 0 {
+                    v = v.min(d[(y + 1) * w + x - 1] + 1);
+                }
+            }
+            d[y * w + x] = v;
+        }
+    }
+    d
+}
+
+/// A small deterministic generator (SplitMix64) for reproducible random views.
+#[derive(Clone, Debug)]
+pub struct SplitMix64(u64);
+
+impl SplitMix64 {
+    pub fn new(seed: u64) -> Self {
+        SplitMix64(seed)
+    }
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    /// Uniform in [0, 1).
+    pub fn next_f64(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// View `index` of the random sequence `seed`: a direction uniform on the sphere, a distance
+/// between 0.6× (close-up, model partly out of frame) and 1.6× the framing distance, and a
+/// target jittered within 0.2 radii of the model centre.
+pub fn random_view(scene: &Scene, seed: u64, index: usize, size: (u32, u32), fov_y: f64) -> View {
+    let mut rng = SplitMix64::new(seed ^ (index as u64).wrapping_mul(0xA076_1D64_78BD_642F));
+    let z = 2.0 * rng.next_f64() - 1.0;
+    let phi = std::f64::consts::TAU * rng.next_f64();
+    let r = (1.0 - z * z).sqrt();
+    let dir = DVec3::new(r * phi.cos(), r * phi.sin(), z);
+    let up = scene.up.vector();
+    let up = if dir.cross(up).length() < 0.2 {
+        up.any_orthonormal_vector()
+    } else {
+        up
+    };
+    let base = View::framing_from(&scene.bounds, up, dir, fov_y, size);
+    let scale = 0.6 + rng.next_f64();
+    let jitter = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 2.0 - DVec3::ONE;
+    let target = scene.bounds.center + jitter * 0.2 * scene.bounds.radius;
+    let eye = target + (base.eye - base.target) * scale;
+    View::new(eye, target, up, fov_y, size, &scene.bounds)
+}
+
+/// What [`run_check`] does.
+#[derive(Clone, Debug)]
+pub struct CheckOptions {
+    pub views: usize,
+    pub seed: u64,
+    pub pixel_error: f64,
+    pub size: (u32, u32),
+    pub fov_y: f64,
+    /// Variants to measure; include [`FatBorders::Off`] to show the cracks they cover.
+    pub variants: Vec<FatBorders>,
+    /// Where to write `view{i}-fb{v}-actual.png` / `-diff.png` for images with cracks.
+    pub save_failures: Option<PathBuf>,
+}
+
+impl Default for CheckOptions {
+    fn default() -> Self {
+        CheckOptions {
+            views: 20,
+            seed: 1,
+            pixel_error: crate::view::DEFAULT_PIXEL_ERROR,
+            size: (512, 384),
+            fov_y: crate::view::DEFAULT_FOV_Y_DEG.to_radians(),
+            variants: vec![
+                FatBorders::Off,
+                FatBorders::Six,
+                FatBorders::Four,
+                FatBorders::Two,
+            ],
+            save_failures: None,
+        }
+    }
+}
+
+/// One view of a check.
+#[derive(Clone, Debug)]
+pub struct ViewResult {
+    pub index: usize,
+    pub view: View,
+    pub reference_grid: u32,
+    pub stats: MeshStats,
+    pub counts: Vec<(FatBorders, CrackCounts)>,
+}
+
+/// All views of a check.
+#[derive(Clone, Debug, Default)]
+pub struct CheckReport {
+    pub views: Vec<ViewResult>,
+}
+
+impl CheckReport {
+    /// Sum of counts over all views for one variant.
+    pub fn total(&self, variant: FatBorders) -> CrackCounts {
+        let mut t = CrackCounts::default();
+        for v in &self.views {
+            for (fb, c) in &v.counts {
+                if *fb == variant {
+                    t.inside += c.inside;
+                    t.background += c.background;
+                    t.behind += c.behind;
+                    t.growth += c.growth;
+                    t.growth_max_px = t.growth_max_px.max(c.growth_max_px);
+                }
+            }
+        }
+        t
+    }
+
+    /// True when no view drawn with fat borders shows a crack pixel.
+    pub fn crack_free(&self) -> bool {
+        self.views
+            .iter()
+            .flat_map(|v| &v.counts)
+            .all(|(fb, c)| *fb == FatBorders::Off || c.cracks() == 0)
+    }
+}
+
+/// Renders `opts.views` random views of `scene` and counts cracks and growth per variant.
+/// `on_view` is called after each view (progress).
+pub fn run_check(
+    renderer: &mut Renderer,
+    scene: &Scene,
+    opts: &CheckOptions,
+    mut on_view: impl FnMut(&ViewResult),
+) -> Result<CheckReport, RenderError> {
+    let mut report = CheckReport::default();
+    let base = RenderOptions {
+        shading: Shading::Flat,
+        background: SENTINEL,
+        surface_color: CHECK_SURFACE,
+        fat_borders: FatBorders::Off,
+        msaa: 1,
+        depth: true,
+    };
+    for index in 0..opts.views {
+        let view = random_view(scene, opts.seed, index, opts.size, opts.fov_y);
+        let (ref_meshes, grid) = reference_meshes(scene, &view, opts.pixel_error);
+        let ref_gpu = renderer.upload(&ref_meshes);
+        let reference = renderer.render(&ref_gpu, &view, &base)?;
+        let meshes = tessellate_scene(scene, &view, opts.pixel_error);
+        let gpu = renderer.upload(&meshes);
+        let mut counts = Vec::new();
+        for &variant in &opts.variants {
+            let frame = renderer.render(
+                &gpu,
+                &view,
+                &RenderOptions {
+                    fat_borders: variant,
+                    ..base
+                },
+            )?;
+            let (c, mask) = classify(&reference, &frame, &view, opts.pixel_error, SENTINEL);
+            if let Some(dir) = &opts.save_failures
+                && (c.cracks() > 0 || c.growth > 0)
+            {
+                let stem = format!("view{index:03}-fb{}", variant.name());
+                // Failure images are a diagnostic aid; a failure to write them is reported on
+                // stderr but does not hide the counts.
+                for (suffix, img) in [("actual", frame.to_rgba_image()), ("diff", mask)] {
+                    let path = dir.join(format!("{stem}-{suffix}.png"));
+                    if let Err(e) = crate::io::png::write_rgba(&path, &img) {
+                        eprintln!("warning: {e}");
+                    }
+                }
+            }
+            counts.push((variant, c));
+        }
+        let result = ViewResult {
+            index,
+            view,
+            reference_grid: grid,
+            stats: MeshStats::of(&meshes),
+            counts,
+        };
+        on_view(&result);
+        report.views.push(result);
+    }
+    Ok(report)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn frame(w: u32, h: u32, depth: Vec<f32>, bg: [u8; 3], surf: [u8; 3]) -> Frame {
+        let color = depth
+            .iter()
+            .flat_map(|z| {
+                let c = if z.is_finite() { surf } else { bg };
+                [c[0], c[1], c[2], 255]
+            })
+            .collect();
+        Frame {
+            width: w,
+            height: h,
+            color,
+            depth: Some(depth),
+        }
+    }
+
+    fn test_view() -> View {
+        let s = crate::model::Sphere {
+            center: DVec3::ZERO,
+            radius: 1.0,
+        };
+        View::new(
+            DVec3::new(0.0, 0.0, 5.0),
+            DVec3::ZERO,
+            DVec3::Y,
+            1.0,
+            (8, 8),
+            &s,
+        )
+    }
+
+    #[test]
+    fn background_hole_and_far_surface_are_cracks_growth_is_counted() {
+        let (w, h) = (8u32, 8u32);
+        let inf = f32::INFINITY;
+        // Reference: a 6×6 block in the middle at depth 5.
+        let rd: Vec<f32> = (0..64)
+            .map(|i| {
+                let (x, y) = (i % 8, i / 8);
+                if (1..7).contains(&x) && (1..7).contains(&y) {
+                    5.0
+                } else {
+                    inf
+                }
+            })
+            .collect();
+        let reference = frame(w, h, rd.clone(), SENTINEL, [128; 3]);
+        let mut ad = rd.clone();
+        ad[3 * 8 + 3] = inf; // a hole showing the background
+        ad[4 * 8 + 4] = 9.0; // the far side showing through
+        ad[5 * 8 + 4] = 5.001; // within tolerance: not a crack
+        ad[0] = 5.0; // growth 1 px outside: not counted (distance 1)
+        let actual = frame(w, h, ad, SENTINEL, [128; 3]);
+        let (c, _) = classify(&reference, &actual, &test_view(), 0.5, SENTINEL);
+        assert_eq!(c.inside, 4 * 4);
+        assert_eq!(c.background, 1);
+        assert_eq!(c.behind, 1);
+        assert_eq!(c.growth, 0);
+
+        // Growth two pixels out: reference smaller.
+        let small: Vec<f32> = (0..64)
+            .map(|i| {
+                let (x, y) = (i % 8, i / 8);
+                if (4..7).contains(&x) && (4..7).contains(&y) {
+                    5.0
+                } else {
+                    inf
+                }
+            })
+            .collect();
+        let reference = frame(w, h, small, SENTINEL, [128; 3]);
+        let (c, _) = classify(&reference, &actual, &test_view(), 0.5, SENTINEL);
+        assert!(c.growth > 0);
+        assert!(c.growth_max_px >= 2);
+    }
+
+    #[test]
+    fn identical_images_have_no_cracks() {
+        let d: Vec<f32> = (0..64)
+            .map(|i| {
+                if i % 8 > 0 && i % 8 < 7 {
+                    3.0
+                } else {
+                    f32::INFINITY
+                }
+            })
+            .collect();
+        let f = frame(8, 8, d, SENTINEL, [128; 3]);
+        let (c, _) = classify(&f, &f, &test_view(), 0.5, SENTINEL);
+        assert_eq!(c.cracks(), 0);
+        assert_eq!(c.growth, 0);
+        assert!(c.inside > 0);
+    }
+
+    #[test]
+    fn random_views_are_reproducible() {
+        let a = SplitMix64::new(7).next_u64();
+        assert_eq!(a, SplitMix64::new(7).next_u64());
+        assert_ne!(a, SplitMix64::new(8).next_u64());
+    }
+}

@@ -1,0 +1,7 @@
+//! Measuring rendered images: crack and growth pixels against a watertight reference
+//! ([`crack`]) and golden-image comparison with NVIDIA's FLIP ([`golden`]).
+
+pub mod crack;
+pub mod golden;
+
+pub use crack::{CheckOptions, CheckReport, CrackCounts, run_check};

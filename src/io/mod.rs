@@ -1,0 +1,120 @@
+//! Readers: files → [`crate::model::Scene`].
+//!
+//! [`load`] picks the reader by file extension (case-insensitive):
+//!
+//! | extension | reader        | up axis |
+//! |-----------|---------------|---------|
+//! | `.bpt`    | [`bpt::read`] | z       |
+//!
+//! Every reader reports failures as a [`LoadError`] that names the file and, where the problem
+//! is at a place in the file, the 1-based line, so that its message reads like
+//! `models/x.bpt:17: expected a number for the y coordinate of control point 3 of patch 2,
+//! found "abc"`. Readers never panic on malformed input.
+
+pub mod bpt;
+pub mod png;
+
+use std::path::{Path, PathBuf};
+
+use crate::model::bezier::PatchError;
+use crate::model::{Scene, UpAxis};
+
+/// Why a model file could not be loaded.
+///
+/// Lines are 1-based; patch and control-point numbers are 0-based indices, as in
+/// [`Scene::patches`] (patch `id`) and [`PatchError`].
+#[derive(Debug, thiserror::Error)]
+pub enum LoadError {
+    /// The file could not be read at all (missing, a directory, no permission…).
+    #[error("{}: cannot read: {source}", .path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+
+    /// The file is binary, not text: a NUL byte or bytes that are not UTF-8 at `offset`.
+    #[error("{}: not a text file: {what} at byte offset {offset}", .path.display())]
+    NotText {
+        path: PathBuf,
+        offset: usize,
+        what: &'static str,
+    },
+
+    /// The file is empty or holds only whitespace.
+    #[error("{}: the file is empty or holds only whitespace", .path.display())]
+    Empty { path: PathBuf },
+
+    /// The text does not follow the format: a token that is not a number, a negative or absurd
+    /// count, an unexpected end of file (`line` = where the file ended), trailing data.
+    #[error("{}:{line}: {reason}", .path.display())]
+    Parse {
+        path: PathBuf,
+        line: usize,
+        reason: String,
+    },
+
+    /// The file is well formed but declares no patches.
+    #[error("{}: the file declares 0 patches", .path.display())]
+    NoPatches { path: PathBuf },
+
+    /// A patch was read but is not valid (degree above the maximum, a coordinate that is NaN or
+    /// infinite, all control points equal). `line` is the line of the offending coordinate for
+    /// a non-finite one, otherwise of the patch's `du dv` header.
+    #[error("{}:{line}: invalid patch {patch}: {source}", .path.display())]
+    Patch {
+        path: PathBuf,
+        line: usize,
+        patch: usize,
+        source: PatchError,
+    },
+
+    /// No reader for this file extension (`extension` is empty when there is none).
+    #[error(
+        "{}: unsupported model format {extension:?} (patchwork reads .bpt files)",
+        .path.display()
+    )]
+    UnsupportedFormat { path: PathBuf, extension: String },
+}
+
+impl LoadError {
+    /// The file the error is about.
+    pub fn path(&self) -> &Path {
+        match self {
+            LoadError::Io { path, .. }
+            | LoadError::NotText { path, .. }
+            | LoadError::Empty { path }
+            | LoadError::Parse { path, .. }
+            | LoadError::NoPatches { path }
+            | LoadError::Patch { path, .. }
+            | LoadError::UnsupportedFormat { path, .. } => path,
+        }
+    }
+
+    /// The 1-based line the error points at, if it points at one.
+    pub fn line(&self) -> Option<usize> {
+        match self {
+            LoadError::Parse { line, .. } | LoadError::Patch { line, .. } => Some(*line),
+            _ => None,
+        }
+    }
+}
+
+/// Loads a model, choosing the reader by the file's extension (case-insensitive).
+///
+/// `.bpt` files (Newell's teaset format, z-up) give a scene with [`UpAxis::Z`]; any other
+/// extension is [`LoadError::UnsupportedFormat`].
+pub fn load(path: &Path) -> Result<Scene, LoadError> {
+    let extension = path
+        .extension()
+        .map(|e| e.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    if extension.eq_ignore_ascii_case("bpt") {
+        let patches = bpt::read(path)?;
+        Ok(Scene::from_bezier(patches, UpAxis::Z))
+    } else {
+        Err(LoadError::UnsupportedFormat {
+            path: path.to_path_buf(),
+            extension,
+        })
+    }
+}

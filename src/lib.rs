@@ -1,0 +1,16 @@
+//! patchwork — crack-free rendering of multi-patch surfaces with fat borders.
+//!
+//! Every patch is tessellated independently to an object-space error ε derived from a pixel
+//! error for the current view (`view`); the gaps this leaves along shared borders are covered by
+//! fat borders expanded in a WGSL vertex shader (`render`), after Balázs, Guthe and Klein,
+//! "Fat Borders: Gap Filling for Efficient View-dependent LOD Rendering" (2004).
+//!
+//! Data flows one way: `io` → `model` → `tessellate` → `render`; `view` converts pixel errors
+//! to object errors in one place; `check` measures rendered images (cracks, growth, goldens).
+
+pub mod check;
+pub mod io;
+pub mod model;
+pub mod render;
+pub mod tessellate;
+pub mod view;

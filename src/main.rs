@@ -1,0 +1,423 @@
+//! `patchwork` command line: render, stats, check.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+
+use clap::{Args, Parser, Subcommand};
+use glam::DVec3;
+use indicatif::{ProgressBar, ProgressStyle};
+
+use patchwork::check::{CheckOptions, run_check};
+use patchwork::io::{self, png};
+use patchwork::model::Scene;
+use patchwork::render::{FatBorders, RenderOptions, Renderer, Shading};
+use patchwork::tessellate::{MeshStats, tessellate_scene};
+use patchwork::view::{self, View};
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "patchwork",
+    version,
+    about = "Crack-free rendering of multi-patch surfaces with fat borders"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Render a model to a PNG (headless; software rasterizers are fine).
+    Render(RenderArgs),
+    /// Tessellate for a view and print patches, triangles, border vertices, ε range, time.
+    Stats(StatsArgs),
+    /// Render random views with fat borders off and on and count crack and growth pixels.
+    Check(CheckArgs),
+}
+
+#[derive(Args, Debug, Clone)]
+struct CameraArgs {
+    /// Image size in pixels.
+    #[arg(long, default_value = "1024x768", value_parser = parse_size)]
+    size: (u32, u32),
+    /// Eye position (default: frames the model's bounding sphere from a three-quarter view).
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    eye: Option<DVec3>,
+    /// Point looked at (default: the model's centre).
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    target: Option<DVec3>,
+    /// Up vector (default 0,1,0; for z-up formats such as .bpt, 0,0,1).
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    up: Option<DVec3>,
+    /// Vertical field of view in degrees.
+    #[arg(long, default_value_t = view::DEFAULT_FOV_Y_DEG)]
+    fov: f64,
+    /// Allowed screen-space error in pixels (ε per patch follows from it).
+    #[arg(long, default_value_t = view::DEFAULT_PIXEL_ERROR)]
+    pixel_error: f64,
+}
+
+#[derive(Args, Debug)]
+struct RenderArgs {
+    /// Model file (.bpt).
+    file: PathBuf,
+    /// Output PNG.
+    #[arg(short, long)]
+    output: PathBuf,
+    #[command(flatten)]
+    camera: CameraArgs,
+    /// lit, flat or ids.
+    #[arg(long, default_value = "lit")]
+    shading: Shading,
+    /// Background colour R,G,B (0–255).
+    #[arg(long, default_value = "255,255,255", value_parser = parse_rgb)]
+    background: [u8; 3],
+    /// Fat-border variant: off, 6, 4 or 2 displaced vertices per border vertex.
+    #[arg(long, default_value = "6")]
+    fat_borders: FatBorders,
+    /// Samples per pixel: 1 or 4.
+    #[arg(long, default_value_t = 4, value_parser = parse_msaa)]
+    msaa: u32,
+    /// Also write linear view-space depth as a 16-bit PNG (0 = near plane, 65535 = far plane).
+    #[arg(long)]
+    depth_out: Option<PathBuf>,
+}
+
+#[derive(Args, Debug)]
+struct StatsArgs {
+    file: PathBuf,
+    #[command(flatten)]
+    camera: CameraArgs,
+}
+
+#[derive(Args, Debug)]
+struct CheckArgs {
+    file: PathBuf,
+    /// Number of random views.
+    #[arg(long, default_value_t = 20)]
+    views: usize,
+    /// Seed of the random views.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Allowed screen-space error in pixels.
+    #[arg(long, default_value_t = view::DEFAULT_PIXEL_ERROR)]
+    pixel_error: f64,
+    /// Image size of every view.
+    #[arg(long, default_value = "512x384", value_parser = parse_size)]
+    size: (u32, u32),
+    /// Vertical field of view in degrees.
+    #[arg(long, default_value_t = view::DEFAULT_FOV_Y_DEG)]
+    fov: f64,
+    /// Write actual and crack-mask images of views with cracks or growth into this folder.
+    #[arg(long)]
+    save_failures: Option<PathBuf>,
+}
+
+fn parse_triple<T: std::str::FromStr>(s: &str, what: &str) -> Result<[T; 3], String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    if parts.len() != 3 {
+        return Err(format!(
+            "expected {what} as three comma-separated numbers, got {s:?}"
+        ));
+    }
+    let mut out = Vec::with_capacity(3);
+    for p in parts {
+        out.push(
+            p.parse::<T>()
+                .map_err(|_| format!("{p:?} is not a valid {what} component"))?,
+        );
+    }
+    out.try_into()
+        .map_err(|_| format!("expected three numbers, got {s:?}"))
+}
+
+fn parse_vec3(s: &str) -> Result<DVec3, String> {
+    let [x, y, z] = parse_triple::<f64>(s, "X,Y,Z")?;
+    let v = DVec3::new(x, y, z);
+    if !v.is_finite() {
+        return Err(format!("{s:?} is not finite"));
+    }
+    Ok(v)
+}
+
+fn parse_rgb(s: &str) -> Result<[u8; 3], String> {
+    parse_triple::<u8>(s, "R,G,B (0-255)")
+}
+
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("expected WxH, got {s:?}"))?;
+    let w: u32 = w
+        .trim()
+        .parse()
+        .map_err(|_| format!("bad width in {s:?}"))?;
+    let h: u32 = h
+        .trim()
+        .parse()
+        .map_err(|_| format!("bad height in {s:?}"))?;
+    if w == 0 || h == 0 {
+        return Err(format!("image size must be at least 1x1, got {w}x{h}"));
+    }
+    Ok((w, h))
+}
+
+fn parse_msaa(s: &str) -> Result<u32, String> {
+    match s {
+        "1" => Ok(1),
+        "4" => Ok(4),
+        _ => Err(format!("MSAA must be 1 or 4, got {s:?}")),
+    }
+}
+
+/// Any error the CLI reports; the message already names the file.
+type CliError = Box<dyn std::error::Error>;
+
+fn check_pixel_error(px: f64) -> Result<(), CliError> {
+    if !(px.is_finite() && px > 0.0) {
+        return Err(format!("--pixel-error must be a positive number of pixels, got {px}").into());
+    }
+    Ok(())
+}
+
+fn check_fov(fov: f64) -> Result<(), CliError> {
+    if !(fov.is_finite() && fov > 0.5 && fov < 179.0) {
+        return Err(format!("--fov must be between 0.5 and 179 degrees, got {fov}").into());
+    }
+    Ok(())
+}
+
+fn make_view(scene: &Scene, cam: &CameraArgs) -> Result<View, CliError> {
+    check_fov(cam.fov)?;
+    check_pixel_error(cam.pixel_error)?;
+    let fov = cam.fov.to_radians();
+    let up = cam.up.unwrap_or_else(|| scene.up.vector());
+    if up.length() < 1e-12 {
+        return Err("--up must not be the zero vector".into());
+    }
+    let target = cam.target.unwrap_or(scene.bounds.center);
+    let view = match cam.eye {
+        Some(eye) => {
+            if eye.distance(target) < 1e-12 {
+                return Err("--eye and --target must differ".into());
+            }
+            if (target - eye).cross(up).length() < 1e-9 * (target - eye).length() * up.length() {
+                return Err("--up must not be parallel to the viewing direction".into());
+            }
+            View::new(eye, target, up, fov, cam.size, &scene.bounds)
+        }
+        None => {
+            let mut v = View::framing(&scene.bounds, up, fov, cam.size);
+            let shift = target - v.target;
+            v.eye += shift;
+            v.target = target;
+            View::new(v.eye, v.target, up, fov, cam.size, &scene.bounds)
+        }
+    };
+    Ok(view)
+}
+
+fn load(path: &Path) -> Result<Scene, CliError> {
+    Ok(io::load(path)?)
+}
+
+fn cmd_render(args: &RenderArgs) -> Result<(), CliError> {
+    let scene = load(&args.file)?;
+    let view = make_view(&scene, &args.camera)?;
+    let t0 = Instant::now();
+    let meshes = tessellate_scene(&scene, &view, args.camera.pixel_error);
+    let t_tess = t0.elapsed();
+    let mut renderer = Renderer::new()?;
+    eprintln!("adapter: {}", renderer.gpu().describe());
+    let gpu = renderer.upload(&meshes);
+    let opts = RenderOptions {
+        shading: args.shading,
+        background: args.background,
+        fat_borders: args.fat_borders,
+        msaa: args.msaa,
+        depth: false,
+        ..RenderOptions::default()
+    };
+    let t1 = Instant::now();
+    let frame = renderer.render(&gpu, &view, &opts)?;
+    let t_render = t1.elapsed();
+    png::write_rgba(&args.output, &frame.to_rgba_image())?;
+    if let Some(depth_path) = &args.depth_out {
+        let d = renderer.render(
+            &gpu,
+            &view,
+            &RenderOptions {
+                depth: true,
+                msaa: 1,
+                ..opts
+            },
+        )?;
+        let depth = d.depth.unwrap_or_default();
+        let (near, far) = (view.near, view.far);
+        let img = image::ImageBuffer::from_fn(view.width, view.height, |x, y| {
+            let z = depth[(y * view.width + x) as usize] as f64;
+            let t = if z.is_finite() {
+                ((z - near) / (far - near)).clamp(0.0, 1.0)
+            } else {
+                1.0
+            };
+            image::Luma([(t * 65535.0).round() as u16])
+        });
+        png::write_gray16(depth_path, &img)?;
+    }
+    let s = MeshStats::of(&meshes);
+    eprintln!(
+        "{}: {} patches, {} triangles, {} border vertices; tessellation {:.1} ms, render {:.1} ms",
+        args.output.display(),
+        s.patches,
+        s.triangles,
+        s.border_vertices,
+        t_tess.as_secs_f64() * 1e3,
+        t_render.as_secs_f64() * 1e3
+    );
+    Ok(())
+}
+
+fn cmd_stats(args: &StatsArgs) -> Result<(), CliError> {
+    let scene = load(&args.file)?;
+    let view = make_view(&scene, &args.camera)?;
+    // Warm-up run (thread pool start), then the timed one.
+    let _ = tessellate_scene(&scene, &view, args.camera.pixel_error);
+    let t0 = Instant::now();
+    let meshes = tessellate_scene(&scene, &view, args.camera.pixel_error);
+    let dt = t0.elapsed();
+    let s = MeshStats::of(&meshes);
+    println!("file              {}", args.file.display());
+    println!("patches           {}", s.patches);
+    println!("triangles         {}", s.triangles);
+    println!("vertices          {}", s.vertices);
+    println!("border vertices   {}", s.border_vertices);
+    println!("pixel error       {} px", args.camera.pixel_error);
+    println!(
+        "eps range         {:.3e} .. {:.3e} (object units)",
+        s.eps_min, s.eps_max
+    );
+    println!("worst error/eps   {:.3} (measured)", s.worst_error_ratio);
+    println!(
+        "tessellation      {:.2} ms ({} threads)",
+        dt.as_secs_f64() * 1e3,
+        rayon::current_num_threads()
+    );
+    println!(
+        "eye               {:.3},{:.3},{:.3}",
+        view.eye.x, view.eye.y, view.eye.z
+    );
+    Ok(())
+}
+
+fn cmd_check(args: &CheckArgs) -> Result<bool, CliError> {
+    check_fov(args.fov)?;
+    check_pixel_error(args.pixel_error)?;
+    if args.views == 0 {
+        return Err("--views must be at least 1".into());
+    }
+    let scene = load(&args.file)?;
+    let mut renderer = Renderer::new()?;
+    eprintln!("adapter: {}", renderer.gpu().describe());
+    if let Some(dir) = &args.save_failures {
+        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    }
+    let opts = CheckOptions {
+        views: args.views,
+        seed: args.seed,
+        pixel_error: args.pixel_error,
+        size: args.size,
+        fov_y: args.fov.to_radians(),
+        save_failures: args.save_failures.clone(),
+        ..CheckOptions::default()
+    };
+    let pb = ProgressBar::new(args.views as u64);
+    pb.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} views {elapsed}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let variants = opts.variants.clone();
+    let header: Vec<String> = variants
+        .iter()
+        .map(|v| format!("cracks fb={:<3}", v.name()))
+        .collect();
+    println!(
+        "{:>4}  {:>9}  {:>8}  {}  {:>10}",
+        "view",
+        "triangles",
+        "ref grid",
+        header.join("  "),
+        "growth(6)"
+    );
+    let report = run_check(&mut renderer, &scene, &opts, |r| {
+        let cells: Vec<String> = r
+            .counts
+            .iter()
+            .map(|(_, c)| format!("{:>13}", c.cracks()))
+            .collect();
+        let growth = r
+            .counts
+            .iter()
+            .find(|(v, _)| *v == FatBorders::Six)
+            .map(|(_, c)| c.growth)
+            .unwrap_or(0);
+        pb.suspend(|| {
+            println!(
+                "{:>4}  {:>9}  {:>8}  {}  {:>10}",
+                r.index,
+                r.stats.triangles,
+                r.reference_grid,
+                cells.join("  "),
+                growth
+            )
+        });
+        pb.inc(1);
+    })?;
+    pb.finish_and_clear();
+    println!();
+    println!(
+        "summary over {} views at {} px pixel error, {}x{}:",
+        args.views, args.pixel_error, args.size.0, args.size.1
+    );
+    for v in &variants {
+        let t = report.total(*v);
+        println!(
+            "  fat borders {:<3}  crack pixels {:>7} (background {}, surface behind {}), growth pixels {} (max {} px out), of {} inside pixels",
+            v.name(),
+            t.cracks(),
+            t.background,
+            t.behind,
+            t.growth,
+            t.growth_max_px,
+            t.inside
+        );
+    }
+    let ok = report.crack_free();
+    println!(
+        "{}",
+        if ok {
+            "OK: no crack pixel with fat borders"
+        } else {
+            "FAIL: crack pixels with fat borders"
+        }
+    );
+    Ok(ok)
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match &cli.command {
+        Command::Render(a) => cmd_render(a).map(|()| true),
+        Command::Stats(a) => cmd_stats(a).map(|()| true),
+        Command::Check(a) => cmd_check(a),
+    };
+    match result {
+        Ok(true) => ExitCode::SUCCESS,
+        Ok(false) => ExitCode::from(1),
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(2)
+        }
+    }
+}

@@ -1,0 +1,93 @@
+//! The wgpu device: picks whichever adapter exists (Vulkan lavapipe, GL llvmpipe, a real GPU)
+//! and says which it used. No adapter is a typed error that names what to install.
+
+use thiserror::Error;
+
+/// Everything that can go wrong while rendering.
+#[derive(Debug, Error)]
+pub enum RenderError {
+    #[error(
+        "no graphics adapter found (backends tried: {backends}). On a machine without a GPU \
+         install Mesa's software rasterizers: `apt-get install -y mesa-vulkan-drivers libvulkan1 \
+         libegl1 libegl-mesa0 libgl1-mesa-dri` (lavapipe for Vulkan, llvmpipe for OpenGL). \
+         WGPU_BACKEND=vulkan|gl selects a backend. ({reason})"
+    )]
+    NoAdapter { backends: String, reason: String },
+    #[error("cannot open a device on adapter {adapter}: {reason}")]
+    NoDevice { adapter: String, reason: String },
+    #[error("image size {width}x{height} is invalid: {reason}")]
+    BadSize {
+        width: u32,
+        height: u32,
+        reason: String,
+    },
+    #[error("MSAA sample count {0} is not supported (use 1 or 4)")]
+    BadSampleCount(u32),
+    #[error("GPU error: {0}")]
+    Gpu(String),
+    #[error("reading back the rendered image failed: {0}")]
+    Readback(String),
+}
+
+/// Device, queue and a description of the adapter in use.
+#[derive(Debug)]
+pub struct Gpu {
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub info: wgpu::AdapterInfo,
+}
+
+impl Gpu {
+    /// Opens the default adapter (honouring `WGPU_BACKEND`, `WGPU_ADAPTER_NAME`, …).
+    pub fn new() -> Result<Gpu, RenderError> {
+        let desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+        let backends = format!("{:?}", desc.backends);
+        let instance = wgpu::Instance::new(desc);
+        let adapter =
+            pollster::block_on(
+                instance.request_adapter(&wgpu::RequestAdapterOptions {
+                    power_preference: wgpu::PowerPreference::from_env()
+                        .unwrap_or(wgpu::PowerPreference::HighPerformance),
+                    force_fallback_adapter: false,
+                    compatible_surface: None,
+                    apply_limit_buckets: false,
+                }),
+            )
+            .map_err(|e| RenderError::NoAdapter {
+                backends,
+                reason: e.to_string(),
+            })?;
+        let info = adapter.get_info();
+        let limits = adapter.limits();
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("patchwork"),
+            required_features: wgpu::Features::empty(),
+            required_limits: limits,
+            experimental_features: wgpu::ExperimentalFeatures::disabled(),
+            memory_hints: wgpu::MemoryHints::Performance,
+            trace: wgpu::Trace::Off,
+        }))
+        .map_err(|e| RenderError::NoDevice {
+            adapter: info.name.clone(),
+            reason: e.to_string(),
+        })?;
+        Ok(Gpu {
+            device,
+            queue,
+            info,
+        })
+    }
+
+    /// "llvmpipe (LLVM 15.0.6, 256 bits) via Vulkan (Cpu)".
+    pub fn describe(&self) -> String {
+        format!(
+            "{} via {:?} ({:?})",
+            self.info.name, self.info.backend, self.info.device_type
+        )
+    }
+
+    /// Largest square texture side the device accepts.
+    pub fn max_texture_side(&self) -> u32 {
+        self.device.limits().max_texture_dimension_2d
+    }
+}

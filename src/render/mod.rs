@@ -1,0 +1,671 @@
+//! Headless wgpu renderer: patch surfaces, then their fat borders, into an offscreen texture
+//! of any size with a depth buffer, read back with rows padded to 256 bytes.
+//!
+//! One frame = one indexed draw of every patch's triangles, then (unless fat borders are off)
+//! one instanced draw of the chosen fat-border template over every border vertex. Shading:
+//! `lit` (two-sided: CAD patches are not consistently oriented, so there is no back-face
+//! culling), `flat` (one colour) and `ids` (a colour per patch). Optionally a second pass at one
+//! sample writes the linear view-space depth into an `R32Float` target, for crack checks and
+//! `--depth-out`.
+
+pub mod fat_border;
+pub mod gpu;
+pub mod shaders;
+
+pub use fat_border::{BorderInstance, FatBorders};
+pub use gpu::{Gpu, RenderError};
+
+use std::collections::HashMap;
+
+use glam::{DVec3, Vec3};
+use wgpu::util::DeviceExt;
+
+use crate::tessellate::PatchMesh;
+use crate::view::View;
+
+/// How surfaces are coloured.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Shading {
+    #[default]
+    Lit,
+    Flat,
+    Ids,
+}
+
+impl std::str::FromStr for Shading {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "lit" => Ok(Shading::Lit),
+            "flat" => Ok(Shading::Flat),
+            "ids" => Ok(Shading::Ids),
+            _ => Err(format!("shading must be lit, flat or ids, not {s:?}")),
+        }
+    }
+}
+
+/// Default background (RGB, 0–255).
+pub const DEFAULT_BACKGROUND: [u8; 3] = [255, 255, 255];
+/// Default surface colour for `lit` shading (RGB, 0–1).
+pub const DEFAULT_SURFACE_COLOR: [f32; 3] = [0.74, 0.77, 0.83];
+
+/// What to draw and how.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RenderOptions {
+    pub shading: Shading,
+    pub background: [u8; 3],
+    /// Colour of `lit` and `flat` surfaces, RGB 0–1.
+    pub surface_color: [f32; 3],
+    pub fat_borders: FatBorders,
+    /// 1 or 4.
+    pub msaa: u32,
+    /// Also render linear view-space depth (one sample per pixel).
+    pub depth: bool,
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        RenderOptions {
+            shading: Shading::Lit,
+            background: DEFAULT_BACKGROUND,
+            surface_color: DEFAULT_SURFACE_COLOR,
+            fat_borders: FatBorders::Six,
+            msaa: 1,
+            depth: false,
+        }
+    }
+}
+
+/// A rendered image read back to the CPU.
+#[derive(Clone, Debug)]
+pub struct Frame {
+    pub width: u32,
+    pub height: u32,
+    /// RGBA8, row-major, top row first, no padding.
+    pub color: Vec<u8>,
+    /// Linear view-space depth per pixel (distance along the viewing axis), `f32::INFINITY`
+    /// where nothing was drawn. Present when [`RenderOptions::depth`] was set.
+    pub depth: Option<Vec<f32>>,
+}
+
+impl Frame {
+    pub fn pixel(&self, x: u32, y: u32) -> [u8; 4] {
+        let i = 4 * (y as usize * self.width as usize + x as usize);
+        [
+            self.color[i],
+            self.color[i + 1],
+            self.color[i + 2],
+            self.color[i + 3],
+        ]
+    }
+
+    /// The colour image as an `image` buffer.
+    pub fn to_rgba_image(&self) -> image::RgbaImage {
+        image::RgbaImage::from_raw(self.width, self.height, self.color.clone())
+            .unwrap_or_else(|| image::RgbaImage::new(self.width, self.height))
+    }
+}
+
+/// Surface vertex as uploaded.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct SurfaceVertex {
+    position: [f32; 3],
+    normal: [f32; 3],
+    patch_id: u32,
+}
+
+/// Patch meshes uploaded to the GPU: one vertex/index buffer for all surfaces, one instance
+/// buffer for all border vertices.
+#[derive(Debug)]
+pub struct GpuMeshes {
+    vertices: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    index_count: u32,
+    borders: wgpu::Buffer,
+    border_count: u32,
+}
+
+impl GpuMeshes {
+    pub fn triangle_count(&self) -> u32 {
+        self.index_count / 3
+    }
+    pub fn border_vertex_count(&self) -> u32 {
+        self.border_count
+    }
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct Globals {
+    view_proj: [[f32; 4]; 4],
+    eye: [f32; 4],
+    forward: [f32; 4],
+    light: [f32; 4],
+    color: [f32; 4],
+    mode: [u32; 4],
+}
+
+#[derive(Debug)]
+struct Pipelines {
+    surface: wgpu::RenderPipeline,
+    border: wgpu::RenderPipeline,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+enum Target {
+    Color { samples: u32 },
+    Depth,
+}
+
+const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+const LINEAR_DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
+const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+/// Cleared value of the linear-depth target: "nothing drawn here".
+const NO_DEPTH: f32 = -1.0;
+
+/// Renderer: device, shader module, pipelines (built on first use per target), templates.
+#[derive(Debug)]
+pub struct Renderer {
+    gpu: Gpu,
+    module: wgpu::ShaderModule,
+    layout: wgpu::PipelineLayout,
+    bind_layout: wgpu::BindGroupLayout,
+    pipelines: HashMap<Target, Pipelines>,
+    templates: HashMap<FatBorders, wgpu::Buffer>,
+}
+
+impl Renderer {
+    /// Opens the default adapter and compiles the shaders.
+    pub fn new() -> Result<Renderer, RenderError> {
+        Self::with_gpu(Gpu::new()?)
+    }
+
+    pub fn with_gpu(gpu: Gpu) -> Result<Renderer, RenderError> {
+        let device = &gpu.device;
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("scene.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(shaders::SCENE.into()),
+        });
+        let bind_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("globals"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            }],
+        });
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("scene"),
+            bind_group_layouts: &[Some(&bind_layout)],
+            immediate_size: 0,
+        });
+        let mut templates = HashMap::new();
+        for v in FatBorders::ALL_ON {
+            let buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("fat border template"),
+                contents: bytemuck::cast_slice(fat_border::template(v)),
+                usage: wgpu::BufferUsages::VERTEX,
+            });
+            templates.insert(v, buf);
+        }
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(RenderError::Gpu(e.to_string()));
+        }
+        Ok(Renderer {
+            gpu,
+            module,
+            layout,
+            bind_layout,
+            pipelines: HashMap::new(),
+            templates,
+        })
+    }
+
+    pub fn gpu(&self) -> &Gpu {
+        &self.gpu
+    }
+
+    /// Uploads patch meshes (surfaces and border instances).
+    pub fn upload(&self, meshes: &[PatchMesh]) -> GpuMeshes {
+        let mut vertices = Vec::new();
+        let mut indices: Vec<u32> = Vec::new();
+        for m in meshes {
+            let base = vertices.len() as u32;
+            vertices.extend(
+                m.positions
+                    .iter()
+                    .zip(&m.normals)
+                    .map(|(p, n)| SurfaceVertex {
+                        position: (*p).into(),
+                        normal: (*n).into(),
+                        patch_id: m.patch_id,
+                    }),
+            );
+            indices.extend(m.triangles.iter().flatten().map(|i| base + i));
+        }
+        let borders = fat_border::border_instances(meshes);
+        let device = &self.gpu.device;
+        // Empty buffers are not allowed to be bound; keep at least one element.
+        let init = |label, bytes: &[u8], usage| {
+            let pad = [0u8; 80];
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: if bytes.is_empty() { &pad } else { bytes },
+                usage,
+            })
+        };
+        GpuMeshes {
+            vertices: init(
+                "vertices",
+                bytemuck::cast_slice(&vertices),
+                wgpu::BufferUsages::VERTEX,
+            ),
+            indices: init(
+                "indices",
+                bytemuck::cast_slice(&indices),
+                wgpu::BufferUsages::INDEX,
+            ),
+            index_count: indices.len() as u32,
+            borders: init(
+                "borders",
+                bytemuck::cast_slice(&borders),
+                wgpu::BufferUsages::VERTEX,
+            ),
+            border_count: borders.len() as u32,
+        }
+    }
+
+    fn pipelines(&mut self, target: Target) -> &Pipelines {
+        if !self.pipelines.contains_key(&target) {
+            let p = self.build_pipelines(target);
+            self.pipelines.insert(target, p);
+        }
+        &self.pipelines[&target]
+    }
+
+    fn build_pipelines(&self, target: Target) -> Pipelines {
+        let (format, samples, fs) = match target {
+            Target::Color { samples } => (COLOR_FORMAT, samples, "fs_color"),
+            Target::Depth => (LINEAR_DEPTH_FORMAT, 1, "fs_depth"),
+        };
+        let surface_attrs = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Uint32];
+        let template_attrs = wgpu::vertex_attr_array![0 => Uint32];
+        let border_attrs = wgpu::vertex_attr_array![
+            1 => Float32x3, 2 => Float32x3, 3 => Float32x3, 4 => Float32x3,
+            5 => Float32x3, 6 => Float32x3, 7 => Float32, 8 => Uint32
+        ];
+        let surface_buffers = [Some(wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<SurfaceVertex>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &surface_attrs,
+        })];
+        let border_buffers = [
+            Some(wgpu::VertexBufferLayout {
+                array_stride: 4,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: &template_attrs,
+            }),
+            Some(wgpu::VertexBufferLayout {
+                array_stride: std::mem::size_of::<BorderInstance>() as u64,
+                step_mode: wgpu::VertexStepMode::Instance,
+                attributes: &border_attrs,
+            }),
+        ];
+        let make = |label: &str, vs: &str, buffers: &[Option<wgpu::VertexBufferLayout<'_>>]| {
+            self.gpu
+                .device
+                .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some(label),
+                    layout: Some(&self.layout),
+                    vertex: wgpu::VertexState {
+                        module: &self.module,
+                        entry_point: Some(vs),
+                        compilation_options: Default::default(),
+                        buffers,
+                    },
+                    primitive: wgpu::PrimitiveState {
+                        topology: wgpu::PrimitiveTopology::TriangleList,
+                        cull_mode: None,
+                        ..Default::default()
+                    },
+                    depth_stencil: Some(wgpu::DepthStencilState {
+                        format: DEPTH_FORMAT,
+                        depth_write_enabled: Some(true),
+                        depth_compare: Some(wgpu::CompareFunction::LessEqual),
+                        stencil: Default::default(),
+                        bias: Default::default(),
+                    }),
+                    multisample: wgpu::MultisampleState {
+                        count: samples,
+                        ..Default::default()
+                    },
+                    fragment: Some(wgpu::FragmentState {
+                        module: &self.module,
+                        entry_point: Some(fs),
+                        compilation_options: Default::default(),
+                        targets: &[Some(wgpu::ColorTargetState {
+                            format,
+                            blend: None,
+                            write_mask: wgpu::ColorWrites::ALL,
+                        })],
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                })
+        };
+        Pipelines {
+            surface: make("surface", "vs_surface", &surface_buffers),
+            border: make("fat border", "vs_border", &border_buffers),
+        }
+    }
+
+    /// Renders `meshes` for `view` and reads the image (and depth, if asked) back.
+    pub fn render(
+        &mut self,
+        meshes: &GpuMeshes,
+        view: &View,
+        opts: &RenderOptions,
+    ) -> Result<Frame, RenderError> {
+        let (w, h) = (view.width, view.height);
+        let max = self.gpu.max_texture_side();
+        if w == 0 || h == 0 {
+            return Err(RenderError::BadSize {
+                width: w,
+                height: h,
+                reason: "zero-sized".into(),
+            });
+        }
+        if w > max || h > max {
+            return Err(RenderError::BadSize {
+                width: w,
+                height: h,
+                reason: format!("this adapter's largest texture side is {max}"),
+            });
+        }
+        if opts.msaa != 1 && opts.msaa != 4 {
+            return Err(RenderError::BadSampleCount(opts.msaa));
+        }
+        let scope = self
+            .gpu
+            .device
+            .push_error_scope(wgpu::ErrorFilter::Validation);
+        let oom = self
+            .gpu
+            .device
+            .push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let globals = self.globals(view, opts);
+        let bg = opts.background.map(|c| c as f64 / 255.0);
+        let clear = wgpu::Color {
+            r: bg[0],
+            g: bg[1],
+            b: bg[2],
+            a: 1.0,
+        };
+        let color = self.draw(
+            meshes,
+            &globals,
+            opts,
+            Target::Color { samples: opts.msaa },
+            w,
+            h,
+            clear,
+        )?;
+        let depth = if opts.depth {
+            let no = wgpu::Color {
+                r: NO_DEPTH as f64,
+                g: 0.0,
+                b: 0.0,
+                a: 0.0,
+            };
+            let raw = self.draw(meshes, &globals, opts, Target::Depth, w, h, no)?;
+            let d: Vec<f32> = bytemuck::pod_collect_to_vec::<u8, f32>(&raw);
+            Some(
+                d.into_iter()
+                    .map(|z| if z == NO_DEPTH { f32::INFINITY } else { z })
+                    .collect(),
+            )
+        } else {
+            None
+        };
+        if let Some(e) = pollster::block_on(oom.pop()) {
+            return Err(RenderError::Gpu(e.to_string()));
+        }
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(RenderError::Gpu(e.to_string()));
+        }
+        Ok(Frame {
+            width: w,
+            height: h,
+            color,
+            depth,
+        })
+    }
+
+    fn globals(&self, view: &View, opts: &RenderOptions) -> Globals {
+        let forward = (view.target - view.eye)
+            .try_normalize()
+            .unwrap_or(DVec3::NEG_Z);
+        let right = forward.cross(view.up).try_normalize().unwrap_or(DVec3::X);
+        let up = right.cross(forward);
+        // A key light from above-left of the viewer.
+        let light = (-forward * 0.8 + up * 0.55 - right * 0.35).normalize();
+        let f4 = |v: DVec3| [v.x as f32, v.y as f32, v.z as f32, 0.0];
+        let c = opts.surface_color;
+        Globals {
+            view_proj: view.view_proj_f32().to_cols_array_2d(),
+            eye: f4(view.eye),
+            forward: f4(forward),
+            light: f4(light),
+            color: [c[0], c[1], c[2], 1.0],
+            mode: [
+                match opts.shading {
+                    Shading::Lit => 0,
+                    Shading::Flat => 1,
+                    Shading::Ids => 2,
+                },
+                0,
+                0,
+                0,
+            ],
+        }
+    }
+
+    /// One pass into a fresh target; returns the unpadded bytes of the (resolved) colour target.
+    #[allow(clippy::too_many_arguments)]
+    fn draw(
+        &mut self,
+        meshes: &GpuMeshes,
+        globals: &Globals,
+        opts: &RenderOptions,
+        target: Target,
+        w: u32,
+        h: u32,
+        clear: wgpu::Color,
+    ) -> Result<Vec<u8>, RenderError> {
+        let (format, samples, bpp) = match target {
+            Target::Color { samples } => (COLOR_FORMAT, samples, 4u32),
+            Target::Depth => (LINEAR_DEPTH_FORMAT, 1, 4u32),
+        };
+        self.pipelines(target);
+        let device = &self.gpu.device;
+        let pipes = &self.pipelines[&target];
+        let size = wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        };
+        let texture = |label, format, samples, usage| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size,
+                mip_level_count: 1,
+                sample_count: samples,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage,
+                view_formats: &[],
+            })
+        };
+        let resolved = texture(
+            "target",
+            format,
+            1,
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        );
+        let msaa = (samples > 1).then(|| {
+            texture(
+                "msaa target",
+                format,
+                samples,
+                wgpu::TextureUsages::RENDER_ATTACHMENT,
+            )
+        });
+        let depth = texture(
+            "depth",
+            DEPTH_FORMAT,
+            samples,
+            wgpu::TextureUsages::RENDER_ATTACHMENT,
+        );
+        let resolved_view = resolved.create_view(&Default::default());
+        let msaa_view = msaa.as_ref().map(|t| t.create_view(&Default::default()));
+        let depth_view = depth.create_view(&Default::default());
+
+        let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("globals"),
+            contents: bytemuck::bytes_of(globals),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("globals"),
+            layout: &self.bind_layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: uniform.as_entire_binding(),
+            }],
+        });
+
+        let mut encoder = device.create_command_encoder(&Default::default());
+        {
+            let (view, resolve_target) = match &msaa_view {
+                Some(v) => (v, Some(&resolved_view)),
+                None => (&resolved_view, None),
+            };
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("scene"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(clear),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &depth_view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Discard,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_bind_group(0, &bind, &[]);
+            if meshes.index_count > 0 {
+                pass.set_pipeline(&pipes.surface);
+                pass.set_vertex_buffer(0, meshes.vertices.slice(..));
+                pass.set_index_buffer(meshes.indices.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(0..meshes.index_count, 0, 0..1);
+            }
+            if let Some(tpl) = self.templates.get(&opts.fat_borders)
+                && meshes.border_count > 0
+            {
+                let n = fat_border::template(opts.fat_borders).len() as u32;
+                pass.set_pipeline(&pipes.border);
+                pass.set_vertex_buffer(0, tpl.slice(..));
+                pass.set_vertex_buffer(1, meshes.borders.slice(..));
+                pass.draw(0..n, 0..meshes.border_count);
+            }
+        }
+        read_texture(&self.gpu, encoder, &resolved, w, h, bpp)
+    }
+}
+
+/// Copies a texture into a buffer with rows padded to `COPY_BYTES_PER_ROW_ALIGNMENT` (256),
+/// maps it and strips the padding.
+fn read_texture(
+    gpu: &Gpu,
+    mut encoder: wgpu::CommandEncoder,
+    texture: &wgpu::Texture,
+    w: u32,
+    h: u32,
+    bpp: u32,
+) -> Result<Vec<u8>, RenderError> {
+    let unpadded = w * bpp;
+    let align = wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+    let padded = unpadded.div_ceil(align) * align;
+    let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("readback"),
+        size: padded as u64 * h as u64,
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    encoder.copy_texture_to_buffer(
+        wgpu::TexelCopyTextureInfo {
+            texture,
+            mip_level: 0,
+            origin: wgpu::Origin3d::ZERO,
+            aspect: wgpu::TextureAspect::All,
+        },
+        wgpu::TexelCopyBufferInfo {
+            buffer: &buffer,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(padded),
+                rows_per_image: Some(h),
+            },
+        },
+        wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
+    );
+    gpu.queue.submit([encoder.finish()]);
+    let (tx, rx) = std::sync::mpsc::channel();
+    buffer.map_async(wgpu::MapMode::Read, .., move |r| {
+        let _ = tx.send(r);
+    });
+    gpu.device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| RenderError::Readback(e.to_string()))?;
+    rx.recv()
+        .map_err(|e| RenderError::Readback(e.to_string()))?
+        .map_err(|e| RenderError::Readback(e.to_string()))?;
+    let mut out = Vec::with_capacity((unpadded * h) as usize);
+    {
+        let data = buffer
+            .get_mapped_range(..)
+            .map_err(|e| RenderError::Readback(e.to_string()))?;
+        for row in data.chunks_exact(padded as usize) {
+            out.extend_from_slice(&row[..unpadded as usize]);
+        }
+    }
+    buffer.unmap();
+    Ok(out)
+}
+
+/// Eye position as f32 (for CPU twins).
+pub fn eye_f32(view: &View) -> Vec3 {
+    view.eye.as_vec3()
+}

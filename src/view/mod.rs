@@ -1,0 +1,232 @@
+//! Camera, viewport and the one place where a pixel error becomes an object-space error.
+//!
+//! Conventions: right-handed world, `look_at_rh(eye, target, up)` and
+//! `perspective_rh(fov_y, width/height, near, far)` (depth 0 at the near plane, 1 at the far
+//! plane); NDC y points up; pixel (0,0) is the top-left pixel and pixel centres sit at
+//! half-integers.
+//!
+//! Pixel error γ → object error ε, after Balázs et al., section 3: a ball of radius ε at distance
+//! d projects to at most `ε · H / (2 d tan(fov_y/2))` pixels, so
+//! `ε = γ · d · 2 tan(fov_y / 2) / H`, with d the distance from the eye to the patch's bounding
+//! sphere, `d = max(|M − eye| − r, 0)`. Nothing nearer than the near plane is visible, so d is
+//! clamped to at least the near-plane distance (otherwise an eye inside a patch's bounding sphere
+//! would ask for ε = 0, an infinitely fine tessellation).
+
+use glam::{DMat4, DVec3, DVec4, Mat4};
+
+use crate::model::Sphere;
+
+/// Default allowed screen-space error, in pixels.
+pub const DEFAULT_PIXEL_ERROR: f64 = 0.5;
+/// Default vertical field of view, in degrees.
+pub const DEFAULT_FOV_Y_DEG: f64 = 45.0;
+
+/// A perspective camera and the image it renders into.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct View {
+    pub eye: DVec3,
+    pub target: DVec3,
+    pub up: DVec3,
+    /// Vertical field of view, radians.
+    pub fov_y: f64,
+    pub width: u32,
+    pub height: u32,
+    pub near: f64,
+    pub far: f64,
+}
+
+impl View {
+    /// A view with near/far fitted to `bounds` (the whole model's sphere).
+    pub fn new(
+        eye: DVec3,
+        target: DVec3,
+        up: DVec3,
+        fov_y: f64,
+        (width, height): (u32, u32),
+        bounds: &Sphere,
+    ) -> View {
+        let (near, far) = fit_near_far(eye, target, bounds);
+        View {
+            eye,
+            target,
+            up,
+            fov_y,
+            width,
+            height,
+            near,
+            far,
+        }
+    }
+
+    /// The default camera: frames the model's bounding sphere from a three-quarter view, above
+    /// and in front, `up` being the model's up axis.
+    pub fn framing(bounds: &Sphere, up: DVec3, fov_y: f64, size: (u32, u32)) -> View {
+        let dir = pleasant_direction(up);
+        Self::framing_from(bounds, up, dir, fov_y, size)
+    }
+
+    /// Frames `bounds` looking from direction `dir` (pointing from the centre to the eye).
+    pub fn framing_from(
+        bounds: &Sphere,
+        up: DVec3,
+        dir: DVec3,
+        fov_y: f64,
+        (width, height): (u32, u32),
+    ) -> View {
+        let aspect = width.max(1) as f64 / height.max(1) as f64;
+        let fov_x = 2.0 * ((fov_y * 0.5).tan() * aspect).atan();
+        let half = 0.5 * fov_y.min(fov_x);
+        let radius = bounds.radius.max(1e-12);
+        let dist = radius / half.sin() * 1.02;
+        let eye = bounds.center + dir.normalize() * dist;
+        View::new(eye, bounds.center, up, fov_y, (width, height), bounds)
+    }
+
+    pub fn aspect(&self) -> f64 {
+        self.width as f64 / self.height as f64
+    }
+
+    pub fn view_matrix(&self) -> DMat4 {
+        DMat4::look_at_rh(self.eye, self.target, self.up)
+    }
+
+    pub fn proj_matrix(&self) -> DMat4 {
+        DMat4::perspective_rh(self.fov_y, self.aspect(), self.near, self.far)
+    }
+
+    /// World → clip space, in f32 for the GPU.
+    pub fn view_proj_f32(&self) -> Mat4 {
+        (self.proj_matrix() * self.view_matrix()).as_mat4()
+    }
+
+    /// Object-space size of one pixel at distance `d` from the eye.
+    pub fn pixel_size_at(&self, d: f64) -> f64 {
+        d * 2.0 * (self.fov_y * 0.5).tan() / self.height as f64
+    }
+
+    /// ε for a patch with bounding sphere `s` at pixel error `pixel_error` (see module doc).
+    pub fn eps_obj(&self, s: &Sphere, pixel_error: f64) -> f64 {
+        let d = (s.center.distance(self.eye) - s.radius).max(self.near);
+        pixel_error * self.pixel_size_at(d)
+    }
+
+    /// Linear view-space depth of a world point (distance along the viewing axis).
+    pub fn view_depth(&self, p: DVec3) -> f64 {
+        -(self.view_matrix() * p.extend(1.0)).z
+    }
+
+    /// Projects a world point to pixel coordinates (x right, y down, centres at half-integers)
+    /// and linear view depth. `None` behind the eye.
+    pub fn project(&self, p: DVec3) -> Option<(f64, f64, f64)> {
+        let clip: DVec4 = self.proj_matrix() * self.view_matrix() * p.extend(1.0);
+        if clip.w <= 0.0 {
+            return None;
+        }
+        let ndc = clip.truncate() / clip.w;
+        let x = (ndc.x * 0.5 + 0.5) * self.width as f64;
+        let y = (0.5 - ndc.y * 0.5) * self.height as f64;
+        Some((x, y, clip.w))
+    }
+}
+
+/// Near/far planes around the model's sphere, with a margin so fat borders pushed back by ε
+/// stay inside the frustum.
+pub fn fit_near_far(eye: DVec3, target: DVec3, bounds: &Sphere) -> (f64, f64) {
+    let axis = (target - eye).try_normalize().unwrap_or(DVec3::NEG_Z);
+    let r = bounds.radius.max(1e-9) * 1.05;
+    let c = (bounds.center - eye).dot(axis);
+    let far = (c + r).max(r * 1e-3);
+    let near = (c - r).max(far * 1e-4).max(r * 1e-4);
+    (near, far * 1.02)
+}
+
+/// A three-quarter view from the front-right, above, for a model whose up axis is `up`.
+pub fn pleasant_direction(up: DVec3) -> DVec3 {
+    let up = up.try_normalize().unwrap_or(DVec3::Y);
+    // "Front" is towards the viewer: −Y for a z-up model, +Z for a y-up model.
+    let front = if up.z.abs() > 0.9 {
+        DVec3::NEG_Y
+    } else {
+        DVec3::Z
+    };
+    let front = (front - up * front.dot(up)).normalize();
+    let right = front.cross(up).normalize() * -1.0;
+    (front + 0.45 * right + 0.55 * up).normalize()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn unit() -> Sphere {
+        Sphere {
+            center: DVec3::ZERO,
+            radius: 1.0,
+        }
+    }
+
+    #[test]
+    fn eps_follows_the_papers_formula() {
+        let v = View::new(
+            DVec3::new(0.0, 0.0, 10.0),
+            DVec3::ZERO,
+            DVec3::Y,
+            60f64.to_radians(),
+            (800, 600),
+            &unit(),
+        );
+        let s = Sphere {
+            center: DVec3::ZERO,
+            radius: 1.0,
+        };
+        let expect = 0.5 * 9.0 * 2.0 * 30f64.to_radians().tan() / 600.0;
+        assert!((v.eps_obj(&s, 0.5) - expect).abs() < 1e-12);
+        // Eye inside the sphere: clamped to the near plane, never zero.
+        let inside = Sphere {
+            center: DVec3::new(0.0, 0.0, 10.0),
+            radius: 5.0,
+        };
+        assert!(v.eps_obj(&inside, 0.5) > 0.0);
+    }
+
+    #[test]
+    fn projection_convention_top_left_origin() {
+        let v = View::new(
+            DVec3::new(0.0, 0.0, 5.0),
+            DVec3::ZERO,
+            DVec3::Y,
+            1.0,
+            (100, 50),
+            &unit(),
+        );
+        let (x, y, d) = v.project(DVec3::ZERO).expect("in front");
+        assert!((x - 50.0).abs() < 1e-9 && (y - 25.0).abs() < 1e-9);
+        assert!((d - 5.0).abs() < 1e-9);
+        // A point above the target lands in the upper half (smaller y).
+        let (_, y_up, _) = v.project(DVec3::new(0.0, 0.5, 0.0)).expect("in front");
+        assert!(y_up < 25.0);
+        assert!((v.view_depth(DVec3::ZERO) - 5.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn framing_keeps_the_sphere_inside() {
+        let s = Sphere {
+            center: DVec3::new(1.0, 2.0, 3.0),
+            radius: 2.0,
+        };
+        let v = View::framing(&s, DVec3::Z, 45f64.to_radians(), (1024, 768));
+        assert!(v.near < v.eye.distance(s.center) - s.radius);
+        assert!(v.far > v.eye.distance(s.center) + s.radius);
+        for dir in [
+            DVec3::X,
+            DVec3::Y,
+            DVec3::Z,
+            -DVec3::X,
+            -DVec3::Y,
+            -DVec3::Z,
+        ] {
+            let (x, y, _) = v.project(s.center + dir * s.radius).expect("in front");
+            assert!((0.0..=1024.0).contains(&x) && (0.0..=768.0).contains(&y));
+        }
+    }
+}
