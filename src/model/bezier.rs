@@ -117,12 +117,9 @@ impl BezierPatch {
         bernstein(self.du, u, &mut bu);
         bernstein(self.dv, v, &mut bv);
         let mut p = DVec3::ZERO;
-        for i in 0..=self.du {
-            let mut row = DVec3::ZERO;
-            for j in 0..=self.dv {
-                row += bv[j] * self.at(i, j);
-            }
-            p += bu[i] * row;
+        for (i, wu) in bu.iter().enumerate().take(self.du + 1) {
+            let row: DVec3 = (0..=self.dv).map(|j| bv[j] * self.at(i, j)).sum();
+            p += *wu * row;
         }
         p
     }
@@ -221,9 +218,9 @@ pub fn bernstein(n: usize, t: f64, out: &mut [f64]) {
     out[0] = 1.0;
     for k in 1..=n {
         let mut prev = 0.0;
-        for j in 0..k {
-            let cur = out[j];
-            out[j] = s * cur + t * prev;
+        for o in out.iter_mut().take(k) {
+            let cur = *o;
+            *o = s * cur + t * prev;
             prev = cur;
         }
         out[k] = t * prev;

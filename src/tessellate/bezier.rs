@@ -51,7 +51,7 @@ impl BezierTessellator {
             let (hu, hv) = (1.0 / nu as f64, 1.0 / nv as f64);
             (m.uu * hu * hu + 2.0 * m.uv * hu * hv + m.vv * hv * hv) / 8.0
         };
-        if !(eps > 0.0) {
+        if eps.is_nan() || eps <= 0.0 {
             return (
                 Resolution {
                     nu: MAX_SEGMENTS,
@@ -129,7 +129,7 @@ impl BezierTessellator {
                 let (pa, pb, pc, pd) = (g(a), g(b), g(c), g(d));
                 let (u0, u1) = (param(i, nu), param(i + 1, nu));
                 let (v0, v1) = (param(j, nv), param(j + 1, nv));
-                let tris: [([u32; 3], [(f64, f64); 3], [DVec3; 3]); 2] =
+                let tris: [Tri; 2] =
                     if pa.distance_squared(pc) <= pb.distance_squared(pd) {
                         [
                             ([a, b, c], [(u0, v0), (u1, v0), (u1, v1)], [pa, pb, pc]),
@@ -165,6 +165,9 @@ impl BezierTessellator {
         }
     }
 }
+
+/// A triangle: vertex indices, parameters and (f32-rounded) positions of its corners.
+type Tri = ([u32; 3], [(f64, f64); 3], [DVec3; 3]);
 
 /// Sampled parametric distance between `S` and the linear triangle (centroid, edge midpoints).
 fn triangle_error(patch: &BezierPatch, uv: &[(f64, f64); 3], p: &[DVec3; 3]) -> f64 {
