@@ -110,8 +110,10 @@ fn fs_color(in: VsOut) -> @location(0) vec4<f32> {
     return vec4<f32>(min(rgb, vec3<f32>(1.0)), 1.0);
 }
 
-// Linear view-space depth (distance along the viewing axis), for crack checks and --depth-out.
+// Linear view-space depth (distance along the viewing axis), for crack checks and --depth-out,
+// as the bits of an f32 in an R32Uint target (32-bit float targets are not renderable on GL);
+// 0 is left where nothing is drawn.
 @fragment
-fn fs_depth(in: VsOut) -> @location(0) f32 {
-    return dot(in.actual - globals.eye.xyz, globals.forward.xyz);
+fn fs_depth(in: VsOut) -> @location(0) u32 {
+    return bitcast<u32>(dot(in.actual - globals.eye.xyz, globals.forward.xyz));
 }

@@ -159,10 +159,11 @@ enum Target {
 }
 
 const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
-const LINEAR_DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
+/// Linear depth as f32 bits: `R32Uint` is renderable on every backend, `R32Float` not on GL.
+const LINEAR_DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
-/// Cleared value of the linear-depth target: "nothing drawn here".
-const NO_DEPTH: f32 = -1.0;
+/// Cleared value of the linear-depth target: "nothing drawn here" (no drawn depth is 0.0).
+const NO_DEPTH: u32 = 0;
 
 /// Renderer: device, shader module, pipelines (built on first use per target), templates.
 #[derive(Debug)]
@@ -425,10 +426,16 @@ impl Renderer {
                 a: 0.0,
             };
             let raw = self.draw(meshes, &globals, opts, Target::Depth, w, h, no)?;
-            let d: Vec<f32> = bytemuck::pod_collect_to_vec::<u8, f32>(&raw);
+            let bits: Vec<u32> = bytemuck::pod_collect_to_vec::<u8, u32>(&raw);
             Some(
-                d.into_iter()
-                    .map(|z| if z == NO_DEPTH { f32::INFINITY } else { z })
+                bits.into_iter()
+                    .map(|b| {
+                        if b == NO_DEPTH {
+                            f32::INFINITY
+                        } else {
+                            f32::from_bits(b)
+                        }
+                    })
                     .collect(),
             )
         } else {

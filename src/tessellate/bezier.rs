@@ -129,18 +129,17 @@ impl BezierTessellator {
                 let (pa, pb, pc, pd) = (g(a), g(b), g(c), g(d));
                 let (u0, u1) = (param(i, nu), param(i + 1, nu));
                 let (v0, v1) = (param(j, nv), param(j + 1, nv));
-                let tris: [Tri; 2] =
-                    if pa.distance_squared(pc) <= pb.distance_squared(pd) {
-                        [
-                            ([a, b, c], [(u0, v0), (u1, v0), (u1, v1)], [pa, pb, pc]),
-                            ([a, c, d], [(u0, v0), (u1, v1), (u0, v1)], [pa, pc, pd]),
-                        ]
-                    } else {
-                        [
-                            ([a, b, d], [(u0, v0), (u1, v0), (u0, v1)], [pa, pb, pd]),
-                            ([b, c, d], [(u1, v0), (u1, v1), (u0, v1)], [pb, pc, pd]),
-                        ]
-                    };
+                let tris: [Tri; 2] = if pa.distance_squared(pc) <= pb.distance_squared(pd) {
+                    [
+                        ([a, b, c], [(u0, v0), (u1, v0), (u1, v1)], [pa, pb, pc]),
+                        ([a, c, d], [(u0, v0), (u1, v1), (u0, v1)], [pa, pc, pd]),
+                    ]
+                } else {
+                    [
+                        ([a, b, d], [(u0, v0), (u1, v0), (u0, v1)], [pa, pb, pd]),
+                        ([b, c, d], [(u1, v0), (u1, v1), (u0, v1)], [pb, pc, pd]),
+                    ]
+                };
                 for (t, uv, p) in &tris {
                     out.triangles.push(*t);
                     error = error.max(triangle_error(patch, uv, p));
