@@ -63,8 +63,15 @@ fn encode_err(path: &Path, e: image::ImageError) -> WriteError {
     }
 }
 
-/// Writes an 8-bit RGBA image as PNG.
-pub fn write_rgba(path: &Path, image: &image::RgbaImage) -> Result<(), WriteError> {
+/// Writes any 8- or 16-bit image buffer as PNG, atomically.
+pub fn write_png<P>(
+    path: &Path,
+    image: &image::ImageBuffer<P, Vec<P::Subpixel>>,
+) -> Result<(), WriteError>
+where
+    P: image::PixelWithColorType,
+    [P::Subpixel]: image::EncodableLayout,
+{
     let (width, height) = image.dimensions();
     if width == 0 || height == 0 {
         return Err(WriteError::EmptyImage {
@@ -80,24 +87,17 @@ pub fn write_rgba(path: &Path, image: &image::RgbaImage) -> Result<(), WriteErro
     })
 }
 
+/// Writes an 8-bit RGBA image as PNG.
+pub fn write_rgba(path: &Path, image: &image::RgbaImage) -> Result<(), WriteError> {
+    write_png(path, image)
+}
+
 /// Writes a 16-bit greyscale PNG.
 pub fn write_gray16(
     path: &Path,
     image: &image::ImageBuffer<image::Luma<u16>, Vec<u16>>,
 ) -> Result<(), WriteError> {
-    let (width, height) = image.dimensions();
-    if width == 0 || height == 0 {
-        return Err(WriteError::EmptyImage {
-            path: path.to_owned(),
-            width,
-            height,
-        });
-    }
-    write_atomic(path, |tmp| {
-        image
-            .save_with_format(tmp, image::ImageFormat::Png)
-            .map_err(|e| encode_err(path, e))
-    })
+    write_png(path, image)
 }
 
 #[cfg(test)]

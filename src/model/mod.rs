@@ -16,22 +16,29 @@ pub struct Sphere {
     pub radius: f64,
 }
 
+/// Axis-aligned bounds of `points`, `None` when empty.
+fn box_of(points: impl IntoIterator<Item = DVec3>) -> Option<(DVec3, DVec3)> {
+    let mut lo = DVec3::splat(f64::INFINITY);
+    let mut hi = DVec3::splat(f64::NEG_INFINITY);
+    for p in points {
+        lo = lo.min(p);
+        hi = hi.max(p);
+    }
+    lo.is_finite().then_some((lo, hi))
+}
+
 impl Sphere {
-    /// Smallest axis-aligned-box sphere around `points` (centre of the box, max distance).
-    /// Returns a zero sphere at the origin for an empty slice.
+    const EMPTY: Sphere = Sphere {
+        center: DVec3::ZERO,
+        radius: 0.0,
+    };
+
+    /// Sphere around `points`: centre of their bounding box, radius the farthest point.
+    /// A zero sphere at the origin for no points.
     pub fn around(points: impl IntoIterator<Item = DVec3> + Clone) -> Sphere {
-        let mut lo = DVec3::splat(f64::INFINITY);
-        let mut hi = DVec3::splat(f64::NEG_INFINITY);
-        for p in points.clone() {
-            lo = lo.min(p);
-            hi = hi.max(p);
-        }
-        if !lo.is_finite() {
-            return Sphere {
-                center: DVec3::ZERO,
-                radius: 0.0,
-            };
-        }
+        let Some((lo, hi)) = box_of(points.clone()) else {
+            return Sphere::EMPTY;
+        };
         let center = (lo + hi) * 0.5;
         let radius = points
             .into_iter()
@@ -40,26 +47,17 @@ impl Sphere {
         Sphere { center, radius }
     }
 
-    /// Union of spheres (conservative: centre of the boxes, max reach).
+    /// Union of spheres (conservative: centre of their boxes, farthest reach).
     pub fn union(spheres: &[Sphere]) -> Sphere {
-        let pts = spheres.iter().flat_map(|s| {
+        let corners = spheres.iter().flat_map(|s| {
             [
                 s.center - DVec3::splat(s.radius),
                 s.center + DVec3::splat(s.radius),
             ]
         });
-        let mut lo = DVec3::splat(f64::INFINITY);
-        let mut hi = DVec3::splat(f64::NEG_INFINITY);
-        for p in pts {
-            lo = lo.min(p);
-            hi = hi.max(p);
-        }
-        if !lo.is_finite() {
-            return Sphere {
-                center: DVec3::ZERO,
-                radius: 0.0,
-            };
-        }
+        let Some((lo, hi)) = box_of(corners) else {
+            return Sphere::EMPTY;
+        };
         let center = (lo + hi) * 0.5;
         let radius = spheres
             .iter()
