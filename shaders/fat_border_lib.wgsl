@@ -10,6 +10,10 @@
 // tests; its Rust CPU twin is `render::fat_border::expand`. Keep all three in step.
 
 const FB_TINY: f32 = 1e-12;
+// Where the polyline turns by less than about 2.5° (cos > 0.999), s_{i-1}, t_i and s_i give
+// offsets within 0.1 % of each other: all three use t_i, so the joint fans of the 6- and
+// 4-vertex variants collapse to zero area and the rasterizer drops them at setup.
+const FB_STRAIGHT_COS: f32 = 0.999;
 
 // `v` normalised, or `fallback` when `v` is (nearly) zero.
 fn fb_normalize_or(v: vec3<f32>, fallback: vec3<f32>) -> vec3<f32> {
@@ -50,25 +54,21 @@ fn fat_border_position(
     let s_next = fb_normalize_or(s_next0, fb_normalize_or(s_prev0, vec3<f32>(1.0, 0.0, 0.0)));
     let s_prev = fb_normalize_or(s_prev0, s_next);
     let t = fb_normalize_or(s_prev + s_next, s_next);
+    var dir_next = s_next;
+    var dir_prev = s_prev;
+    if (dot(s_prev, s_next) > FB_STRAIGHT_COS) {
+        dir_next = t;
+        dir_prev = t;
+    }
     var off = vec3<f32>(0.0, 0.0, 0.0);
     switch slot {
-        case 1u: { off = fb_side(s_next, d); }
+        case 1u: { off = fb_side(dir_next, d); }
         case 2u: { off = fb_side(t, d); }
-        case 3u: { off = fb_side(s_prev, d); }
-        case 4u: { off = fb_side(-s_next, d); }
+        case 3u: { off = fb_side(dir_prev, d); }
+        case 4u: { off = fb_side(-dir_next, d); }
         case 5u: { off = fb_side(-t, d); }
-        case 6u: { off = fb_side(-s_prev, d); }
+        case 6u: { off = fb_side(-dir_prev, d); }
         default: { off = vec3<f32>(0.0, 0.0, 0.0); }
     }
     return cur + eps * off - eps * d;
-}
-
-// A template entry packs which end of the border segment (0 = v_i, 1 = v_{i+1}) in bit 3 and
-// the slot (0..6) in bits 0..2; see `render::fat_border::template`.
-fn fb_template_end(code: u32) -> u32 {
-    return (code >> 3u) & 1u;
-}
-
-fn fb_template_slot(code: u32) -> u32 {
-    return code & 7u;
 }

@@ -41,39 +41,25 @@ fn vs_surface(
     return out;
 }
 
-// One instance per border vertex v_i; `code` walks the template of the chosen variant.
+// One displaced fat-border vertex: border vertex `cur` with its neighbours on the border
+// polyline and the slot to expand (see `render::fat_border::BorderGeometry`).
 @vertex
 fn vs_border(
-    @location(0) code: u32,
-    @location(1) prev: vec3<f32>,
-    @location(2) a: vec3<f32>,
-    @location(3) b: vec3<f32>,
-    @location(4) c: vec3<f32>,
-    @location(5) normal_a: vec3<f32>,
-    @location(6) normal_b: vec3<f32>,
-    @location(7) eps: f32,
-    @location(8) patch_id: u32,
+    @location(0) prev: vec3<f32>,
+    @location(1) cur: vec3<f32>,
+    @location(2) next: vec3<f32>,
+    @location(3) normal: vec3<f32>,
+    @location(4) eps: f32,
+    @location(5) patch_id: u32,
+    @location(6) slot: u32,
 ) -> VsOut {
-    let end = fb_template_end(code);
-    let slot = fb_template_slot(code);
-    var p: vec3<f32>;
-    var n: vec3<f32>;
-    var source: vec3<f32>;
-    if (end == 0u) {
-        p = fat_border_position(prev, a, b, globals.eye.xyz, eps, slot);
-        n = normal_a;
-        source = a;
-    } else {
-        p = fat_border_position(a, b, c, globals.eye.xyz, eps, slot);
-        n = normal_b;
-        source = b;
-    }
+    let p = fat_border_position(prev, cur, next, globals.eye.xyz, eps, slot);
     var out: VsOut;
     out.clip = globals.view_proj * vec4<f32>(p, 1.0);
     // Shading attributes come from the original border vertex (paper, step 6).
-    out.world = source;
+    out.world = cur;
     out.actual = p;
-    out.normal = n;
+    out.normal = normal;
     out.patch_id = patch_id;
     return out;
 }

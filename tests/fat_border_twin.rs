@@ -33,6 +33,16 @@ fn inputs() -> Vec<(Vec3, Vec3, Vec3, Vec3, f32, u32)> {
             out.push((prev, cur, next, eye, eps, slot));
         }
     }
+    // Nearly straight joints, on both sides of the threshold where the fans collapse.
+    for k in 0..60 {
+        let angle = 0.001 * k as f32; // 0 .. 3.4°, the threshold is acos(0.999) ≈ 2.56°
+        let cur = Vec3::new(0.3, -0.2, 0.1);
+        let prev = cur - Vec3::new(0.1, 0.0, 0.0);
+        let next = cur + 0.1 * Vec3::new(angle.cos(), angle.sin(), 0.0);
+        for slot in 0..=6 {
+            out.push((prev, cur, next, Vec3::new(1.0, 2.0, 9.0), 0.02, slot));
+        }
+    }
     // Degenerate cases: collapsed segments, a segment seen end-on, a 180° turn.
     let z = Vec3::ZERO;
     let eye = Vec3::new(0.0, 0.0, 5.0);

@@ -120,6 +120,9 @@ pub fn decode(code: u32) -> (u32, u32) {
 }
 
 const TINY: f32 = 1e-12;
+/// Below this turn (cos of the angle between segments) s_{i−1}, t_i, s_i all use t_i, so the
+/// joint fans collapse to zero area (same constant as `FB_STRAIGHT_COS` in WGSL).
+pub const STRAIGHT_COS: f32 = 0.999;
 
 fn normalize_or(v: Vec3, fallback: Vec3) -> Vec3 {
     let l2 = v.dot(v);
@@ -147,13 +150,18 @@ pub fn expand(prev: Vec3, cur: Vec3, next: Vec3, eye: Vec3, eps: f32, slot: u32)
     let s_next = normalize_or(s_next0, normalize_or(s_prev0, Vec3::X));
     let s_prev = normalize_or(s_prev0, s_next);
     let t = normalize_or(s_prev + s_next, s_next);
+    let (dir_next, dir_prev) = if s_prev.dot(s_next) > STRAIGHT_COS {
+        (t, t)
+    } else {
+        (s_next, s_prev)
+    };
     let off = match slot {
-        1 => side(s_next, d),
+        1 => side(dir_next, d),
         2 => side(t, d),
-        3 => side(s_prev, d),
-        4 => side(-s_next, d),
+        3 => side(dir_prev, d),
+        4 => side(-dir_next, d),
         5 => side(-t, d),
-        6 => side(-s_prev, d),
+        6 => side(-dir_prev, d),
         _ => Vec3::ZERO,
     };
     cur + eps * off - eps * d
@@ -171,6 +179,80 @@ pub struct BorderInstance {
     pub normal_b: [f32; 3],
     pub eps: f32,
     pub patch_id: u32,
+}
+
+/// One displaced fat-border vertex as the GPU gets it: border vertex v_i (with its
+/// neighbours, normal, ε, patch) and the slot (0 = v_i, 1..6 = v_i1..v_i6).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct BorderVertex {
+    pub prev: [f32; 3],
+    pub cur: [f32; 3],
+    pub next: [f32; 3],
+    pub normal: [f32; 3],
+    pub eps: f32,
+    pub patch_id: u32,
+    pub slot: u32,
+}
+
+/// Slots per border vertex in [`BorderGeometry::vertices`].
+pub const SLOTS: usize = 7;
+
+/// Fat-border geometry for one flat indexed draw: every border vertex expanded to its 7
+/// slots, and per variant the triangle indices of the template (a triangle may use slots of
+/// the next border vertex, so neighbouring border vertices share displaced vertices and each
+/// is shaded once). Unused slots are never indexed, hence never shaded.
+#[derive(Clone, Debug, Default)]
+pub struct BorderGeometry {
+    pub vertices: Vec<BorderVertex>,
+    /// Indices for [`FatBorders::Six`], [`FatBorders::Four`], [`FatBorders::Two`].
+    pub indices: [Vec<u32>; 3],
+}
+
+impl BorderGeometry {
+    pub fn of(meshes: &[PatchMesh]) -> BorderGeometry {
+        let mut g = BorderGeometry::default();
+        for m in meshes {
+            let eps = m.eps_border() as f32;
+            for ring in &m.borders {
+                let n = ring.len();
+                let base = g.vertices.len() as u32;
+                for k in 0..n {
+                    let at = |o: usize| m.positions[ring[(k + o) % n] as usize].into();
+                    for slot in 0..SLOTS as u32 {
+                        g.vertices.push(BorderVertex {
+                            prev: at(n - 1),
+                            cur: at(0),
+                            next: at(1),
+                            normal: m.normals[ring[k] as usize].into(),
+                            eps,
+                            patch_id: m.patch_id,
+                            slot,
+                        });
+                    }
+                }
+                for (v, variant) in FatBorders::ALL_ON.iter().enumerate() {
+                    for k in 0..n {
+                        g.indices[v].extend(template(*variant).iter().map(|&code| {
+                            let (end, slot) = decode(code);
+                            let j = (k + end as usize) % n;
+                            base + (j * SLOTS) as u32 + slot
+                        }));
+                    }
+                }
+            }
+        }
+        g
+    }
+
+    pub fn indices(&self, variant: FatBorders) -> &[u32] {
+        match variant {
+            FatBorders::Off => &[],
+            FatBorders::Six => &self.indices[0],
+            FatBorders::Four => &self.indices[1],
+            FatBorders::Two => &self.indices[2],
+        }
+    }
 }
 
 /// Border instances of every closed border loop of `meshes`, ε = each patch's
@@ -276,6 +358,47 @@ mod tests {
         for (p, c0, n, e) in cases {
             for slot in 0..=6 {
                 assert!(expand(p, c0, n, e, 0.1, slot).is_finite());
+            }
+        }
+    }
+
+    #[test]
+    fn geometry_indices_expand_to_the_cpu_twin_triangles() {
+        // A square loop: the GPU index lists must name, per border vertex, exactly the
+        // template's (end, slot) pairs.
+        let mesh = PatchMesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y],
+            normals: vec![Vec3::Z; 4],
+            borders: vec![vec![0, 1, 2, 3]],
+            eps_target: 0.1,
+            ..PatchMesh::default()
+        };
+        let g = BorderGeometry::of(std::slice::from_ref(&mesh));
+        assert_eq!(g.vertices.len(), 4 * SLOTS);
+        let eye = Vec3::new(0.3, 0.2, 4.0);
+        let gpu_like = |i: u32| {
+            let v = g.vertices[i as usize];
+            expand(
+                v.prev.into(),
+                v.cur.into(),
+                v.next.into(),
+                eye,
+                v.eps,
+                v.slot,
+            )
+        };
+        let instances = border_instances(std::slice::from_ref(&mesh));
+        for variant in FatBorders::ALL_ON {
+            let idx = g.indices(variant);
+            let cpu: Vec<[Vec3; 3]> = instances
+                .iter()
+                .flat_map(|i| instance_triangles(i, eye, variant))
+                .collect();
+            assert_eq!(idx.len(), cpu.len() * 3, "{variant}");
+            for (t, tri) in idx.chunks_exact(3).zip(&cpu) {
+                for c in 0..3 {
+                    assert!((gpu_like(t[c]) - tri[c]).length() < 1e-6, "{variant}");
+                }
             }
         }
     }

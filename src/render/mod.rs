@@ -2,7 +2,8 @@
 //! of any size with a depth buffer, read back with rows padded to 256 bytes.
 //!
 //! One frame = one indexed draw of every patch's triangles, then (unless fat borders are off)
-//! one instanced draw of the chosen fat-border template over every border vertex. Shading:
+//! one indexed draw of the chosen fat-border template over every border vertex (no instancing:
+//! llvmpipe pays a fixed cost per instance). Shading:
 //! `lit` (two-sided: CAD patches are not consistently oriented, so there is no back-face
 //! culling), `flat` (one colour) and `ids` (a colour per patch). Optionally a second pass at one
 //! sample writes the linear view-space depth into an `R32Float` target, for crack checks and
@@ -12,7 +13,7 @@ pub mod fat_border;
 pub mod gpu;
 pub mod shaders;
 
-pub use fat_border::{BorderInstance, FatBorders};
+pub use fat_border::{BorderGeometry, BorderVertex, FatBorders};
 pub use gpu::{Gpu, RenderError};
 
 use std::collections::HashMap;
@@ -122,16 +123,28 @@ pub struct GpuMeshes {
     vertices: wgpu::Buffer,
     indices: wgpu::Buffer,
     index_count: u32,
-    borders: wgpu::Buffer,
-    border_count: u32,
+    border_vertices: wgpu::Buffer,
+    /// Index buffers for the 6-, 4- and 2-vertex variants, with their index counts.
+    border_indices: [(wgpu::Buffer, u32); 3],
+    border_vertex_count: u32,
 }
 
 impl GpuMeshes {
     pub fn triangle_count(&self) -> u32 {
         self.index_count / 3
     }
+    /// Border vertices (of the patch polylines, before expansion).
     pub fn border_vertex_count(&self) -> u32 {
-        self.border_count
+        self.border_vertex_count
+    }
+
+    fn border_indices(&self, variant: FatBorders) -> Option<&(wgpu::Buffer, u32)> {
+        match variant {
+            FatBorders::Off => None,
+            FatBorders::Six => Some(&self.border_indices[0]),
+            FatBorders::Four => Some(&self.border_indices[1]),
+            FatBorders::Two => Some(&self.border_indices[2]),
+        }
     }
 }
 
@@ -165,7 +178,7 @@ const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 /// Cleared value of the linear-depth target: "nothing drawn here" (no drawn depth is 0.0).
 const NO_DEPTH: u32 = 0;
 
-/// Renderer: device, shader module, pipelines (built on first use per target), templates.
+/// Renderer: device, shader module, pipelines (built on first use per target).
 #[derive(Debug)]
 pub struct Renderer {
     gpu: Gpu,
@@ -173,7 +186,91 @@ pub struct Renderer {
     layout: wgpu::PipelineLayout,
     bind_layout: wgpu::BindGroupLayout,
     pipelines: HashMap<Target, Pipelines>,
-    templates: HashMap<FatBorders, wgpu::Buffer>,
+    /// Render targets, kept between frames of the same size.
+    targets: HashMap<Target, Targets>,
+}
+
+/// The textures, uniform and readback buffer one pass renders with; reused while the image
+/// size stays the same.
+#[derive(Debug)]
+struct Targets {
+    size: (u32, u32),
+    resolved: wgpu::Texture,
+    resolved_view: wgpu::TextureView,
+    msaa_view: Option<wgpu::TextureView>,
+    depth_view: wgpu::TextureView,
+    uniform: wgpu::Buffer,
+    bind: wgpu::BindGroup,
+    readback: wgpu::Buffer,
+    row_bytes: u32,
+    padded_row_bytes: u32,
+}
+
+impl Targets {
+    fn new(gpu: &Gpu, layout: &wgpu::BindGroupLayout, target: Target, w: u32, h: u32) -> Self {
+        let (format, samples) = match target {
+            Target::Color { samples } => (COLOR_FORMAT, samples),
+            Target::Depth => (LINEAR_DEPTH_FORMAT, 1),
+        };
+        let device = &gpu.device;
+        let size = wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        };
+        let texture = |label, format, samples, usage| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size,
+                mip_level_count: 1,
+                sample_count: samples,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage,
+                view_formats: &[],
+            })
+        };
+        let attach = wgpu::TextureUsages::RENDER_ATTACHMENT;
+        let resolved = texture("target", format, 1, attach | wgpu::TextureUsages::COPY_SRC);
+        let msaa = (samples > 1).then(|| texture("msaa target", format, samples, attach));
+        let depth = texture("depth", DEPTH_FORMAT, samples, attach);
+        let uniform = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("globals"),
+            size: std::mem::size_of::<Globals>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("globals"),
+            layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: uniform.as_entire_binding(),
+            }],
+        });
+        // Both formats have 4 bytes per pixel.
+        let row_bytes = w * 4;
+        let align = wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+        let padded_row_bytes = row_bytes.div_ceil(align) * align;
+        let readback = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size: padded_row_bytes as u64 * h as u64,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        Targets {
+            size: (w, h),
+            resolved_view: resolved.create_view(&Default::default()),
+            resolved,
+            msaa_view: msaa.as_ref().map(|t| t.create_view(&Default::default())),
+            depth_view: depth.create_view(&Default::default()),
+            uniform,
+            bind,
+            readback,
+            row_bytes,
+            padded_row_bytes,
+        }
+    }
 }
 
 impl Renderer {
@@ -207,15 +304,6 @@ impl Renderer {
             bind_group_layouts: &[Some(&bind_layout)],
             immediate_size: 0,
         });
-        let mut templates = HashMap::new();
-        for v in FatBorders::ALL_ON {
-            let buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("fat border template"),
-                contents: bytemuck::cast_slice(fat_border::template(v)),
-                usage: wgpu::BufferUsages::VERTEX,
-            });
-            templates.insert(v, buf);
-        }
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(RenderError::Gpu(e.to_string()));
         }
@@ -225,7 +313,7 @@ impl Renderer {
             layout,
             bind_layout,
             pipelines: HashMap::new(),
-            templates,
+            targets: HashMap::new(),
         })
     }
 
@@ -251,7 +339,7 @@ impl Renderer {
             );
             indices.extend(m.triangles.iter().flatten().map(|i| base + i));
         }
-        let borders = fat_border::border_instances(meshes);
+        let borders = BorderGeometry::of(meshes);
         let device = &self.gpu.device;
         // Empty buffers are not allowed to be bound; keep at least one element.
         let init = |label, bytes: &[u8], usage| {
@@ -274,12 +362,20 @@ impl Renderer {
                 wgpu::BufferUsages::INDEX,
             ),
             index_count: indices.len() as u32,
-            borders: init(
-                "borders",
-                bytemuck::cast_slice(&borders),
+            border_vertices: init(
+                "fat border vertices",
+                bytemuck::cast_slice(&borders.vertices),
                 wgpu::BufferUsages::VERTEX,
             ),
-            border_count: borders.len() as u32,
+            border_indices: borders.indices.each_ref().map(|idx| {
+                let buf = init(
+                    "fat border indices",
+                    bytemuck::cast_slice(idx),
+                    wgpu::BufferUsages::INDEX,
+                );
+                (buf, idx.len() as u32)
+            }),
+            border_vertex_count: (borders.vertices.len() / fat_border::SLOTS) as u32,
         }
     }
 
@@ -297,28 +393,20 @@ impl Renderer {
             Target::Depth => (LINEAR_DEPTH_FORMAT, 1, "fs_depth"),
         };
         let surface_attrs = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Uint32];
-        let template_attrs = wgpu::vertex_attr_array![0 => Uint32];
         let border_attrs = wgpu::vertex_attr_array![
-            1 => Float32x3, 2 => Float32x3, 3 => Float32x3, 4 => Float32x3,
-            5 => Float32x3, 6 => Float32x3, 7 => Float32, 8 => Uint32
+            0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Float32x3,
+            4 => Float32, 5 => Uint32, 6 => Uint32
         ];
         let surface_buffers = [Some(wgpu::VertexBufferLayout {
             array_stride: std::mem::size_of::<SurfaceVertex>() as u64,
             step_mode: wgpu::VertexStepMode::Vertex,
             attributes: &surface_attrs,
         })];
-        let border_buffers = [
-            Some(wgpu::VertexBufferLayout {
-                array_stride: 4,
-                step_mode: wgpu::VertexStepMode::Vertex,
-                attributes: &template_attrs,
-            }),
-            Some(wgpu::VertexBufferLayout {
-                array_stride: std::mem::size_of::<BorderInstance>() as u64,
-                step_mode: wgpu::VertexStepMode::Instance,
-                attributes: &border_attrs,
-            }),
-        ];
+        let border_buffers = [Some(wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<BorderVertex>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &border_attrs,
+        })];
         let make = |label: &str, vs: &str, buffers: &[Option<wgpu::VertexBufferLayout<'_>>]| {
             self.gpu
                 .device
@@ -496,73 +584,28 @@ impl Renderer {
         h: u32,
         clear: wgpu::Color,
     ) -> Result<Vec<u8>, RenderError> {
-        let (format, samples, bpp) = match target {
-            Target::Color { samples } => (COLOR_FORMAT, samples, 4u32),
-            Target::Depth => (LINEAR_DEPTH_FORMAT, 1, 4u32),
-        };
         self.pipelines(target);
+        if self.targets.get(&target).is_none_or(|t| t.size != (w, h)) {
+            let t = Targets::new(&self.gpu, &self.bind_layout, target, w, h);
+            self.targets.insert(target, t);
+        }
         let device = &self.gpu.device;
         let pipes = &self.pipelines[&target];
-        let size = wgpu::Extent3d {
-            width: w,
-            height: h,
-            depth_or_array_layers: 1,
-        };
-        let texture = |label, format, samples, usage| {
-            device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size,
-                mip_level_count: 1,
-                sample_count: samples,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage,
-                view_formats: &[],
-            })
-        };
-        let resolved = texture(
-            "target",
-            format,
-            1,
-            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        let targets = &self.targets[&target];
+        self.gpu
+            .queue
+            .write_buffer(&targets.uniform, 0, bytemuck::bytes_of(globals));
+        let (resolved_view, msaa_view, depth_view, bind) = (
+            &targets.resolved_view,
+            &targets.msaa_view,
+            &targets.depth_view,
+            &targets.bind,
         );
-        let msaa = (samples > 1).then(|| {
-            texture(
-                "msaa target",
-                format,
-                samples,
-                wgpu::TextureUsages::RENDER_ATTACHMENT,
-            )
-        });
-        let depth = texture(
-            "depth",
-            DEPTH_FORMAT,
-            samples,
-            wgpu::TextureUsages::RENDER_ATTACHMENT,
-        );
-        let resolved_view = resolved.create_view(&Default::default());
-        let msaa_view = msaa.as_ref().map(|t| t.create_view(&Default::default()));
-        let depth_view = depth.create_view(&Default::default());
-
-        let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("globals"),
-            contents: bytemuck::bytes_of(globals),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
-        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("globals"),
-            layout: &self.bind_layout,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: uniform.as_entire_binding(),
-            }],
-        });
-
         let mut encoder = device.create_command_encoder(&Default::default());
         {
-            let (view, resolve_target) = match &msaa_view {
-                Some(v) => (v, Some(&resolved_view)),
-                None => (&resolved_view, None),
+            let (view, resolve_target) = match msaa_view {
+                Some(v) => (v, Some(resolved_view)),
+                None => (resolved_view, None),
             };
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("scene"),
@@ -576,7 +619,7 @@ impl Renderer {
                     },
                 })],
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &depth_view,
+                    view: depth_view,
                     depth_ops: Some(wgpu::Operations {
                         load: wgpu::LoadOp::Clear(1.0),
                         store: wgpu::StoreOp::Discard,
@@ -587,46 +630,36 @@ impl Renderer {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_bind_group(0, &bind, &[]);
+            pass.set_bind_group(0, bind, &[]);
             if meshes.index_count > 0 {
                 pass.set_pipeline(&pipes.surface);
                 pass.set_vertex_buffer(0, meshes.vertices.slice(..));
                 pass.set_index_buffer(meshes.indices.slice(..), wgpu::IndexFormat::Uint32);
                 pass.draw_indexed(0..meshes.index_count, 0, 0..1);
             }
-            if let Some(tpl) = self.templates.get(&opts.fat_borders)
-                && meshes.border_count > 0
+            if let Some((indices, count)) = meshes.border_indices(opts.fat_borders)
+                && *count > 0
             {
-                let n = fat_border::template(opts.fat_borders).len() as u32;
                 pass.set_pipeline(&pipes.border);
-                pass.set_vertex_buffer(0, tpl.slice(..));
-                pass.set_vertex_buffer(1, meshes.borders.slice(..));
-                pass.draw(0..n, 0..meshes.border_count);
+                pass.set_vertex_buffer(0, meshes.border_vertices.slice(..));
+                pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(0..*count, 0, 0..1);
             }
         }
-        read_texture(&self.gpu, encoder, &resolved, w, h, bpp)
+        read_texture(&self.gpu, encoder, targets)
     }
 }
 
-/// Copies a texture into a buffer with rows padded to `COPY_BYTES_PER_ROW_ALIGNMENT` (256),
-/// maps it and strips the padding.
+/// Copies the resolved target into the readback buffer (rows padded to
+/// `COPY_BYTES_PER_ROW_ALIGNMENT`, 256), maps it and strips the padding.
 fn read_texture(
     gpu: &Gpu,
     mut encoder: wgpu::CommandEncoder,
-    texture: &wgpu::Texture,
-    w: u32,
-    h: u32,
-    bpp: u32,
+    targets: &Targets,
 ) -> Result<Vec<u8>, RenderError> {
-    let unpadded = w * bpp;
-    let align = wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
-    let padded = unpadded.div_ceil(align) * align;
-    let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("readback"),
-        size: padded as u64 * h as u64,
-        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-        mapped_at_creation: false,
-    });
+    let (w, h) = targets.size;
+    let (unpadded, padded) = (targets.row_bytes, targets.padded_row_bytes);
+    let (texture, buffer) = (&targets.resolved, &targets.readback);
     encoder.copy_texture_to_buffer(
         wgpu::TexelCopyTextureInfo {
             texture,
@@ -635,7 +668,7 @@ fn read_texture(
             aspect: wgpu::TextureAspect::All,
         },
         wgpu::TexelCopyBufferInfo {
-            buffer: &buffer,
+            buffer,
             layout: wgpu::TexelCopyBufferLayout {
                 offset: 0,
                 bytes_per_row: Some(padded),
@@ -660,15 +693,14 @@ fn read_texture(
         .map_err(|e| RenderError::Readback(e.to_string()))?
         .map_err(|e| RenderError::Readback(e.to_string()))?;
     let mut out = Vec::with_capacity((unpadded * h) as usize);
-    {
-        let data = buffer
-            .get_mapped_range(..)
-            .map_err(|e| RenderError::Readback(e.to_string()))?;
+    let copied = buffer.get_mapped_range(..).map(|data| {
         for row in data.chunks_exact(padded as usize) {
             out.extend_from_slice(&row[..unpadded as usize]);
         }
-    }
+    });
+    // Unmapped whatever happened: the buffer is reused by the next frame.
     buffer.unmap();
+    copied.map_err(|e| RenderError::Readback(e.to_string()))?;
     Ok(out)
 }
 
