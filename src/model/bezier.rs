@@ -66,6 +66,17 @@ pub struct SecondDerivativeBounds {
 
 impl BezierPatch {
     /// Checks degrees, count and finiteness; rejects a patch whose control points all coincide.
+    ///
+    /// ```
+    /// use glam::DVec3;
+    /// use patchwork::model::BezierPatch;
+    ///
+    /// // A bilinear patch (degree 1×1): its corners are its control points.
+    /// let corners = vec![DVec3::ZERO, DVec3::Y, DVec3::X, DVec3::new(1.0, 1.0, 1.0)];
+    /// let patch = BezierPatch::new(1, 1, corners).expect("valid");
+    /// assert_eq!(patch.eval(1.0, 1.0), DVec3::new(1.0, 1.0, 1.0));
+    /// assert!(BezierPatch::new(1, 1, vec![DVec3::NAN; 4]).is_err());
+    /// ```
     pub fn new(du: usize, dv: usize, ctrl: Vec<DVec3>) -> Result<Self, PatchError> {
         if du > MAX_DEGREE || dv > MAX_DEGREE {
             return Err(PatchError::DegreeTooHigh { du, dv });

@@ -105,6 +105,19 @@ impl View {
     }
 
     /// ε for a patch with bounding sphere `s` at pixel error `pixel_error` (see module doc).
+    ///
+    /// ```
+    /// use glam::DVec3;
+    /// use patchwork::model::Sphere;
+    /// use patchwork::view::View;
+    ///
+    /// let model = Sphere { center: DVec3::ZERO, radius: 1.0 };
+    /// let fov = 90f64.to_radians();
+    /// let view = View::new(DVec3::new(0.0, 0.0, 11.0), DVec3::ZERO, DVec3::Y, fov, (800, 600), &model);
+    /// // d = 11 − 1 = 10 units; one pixel there is 10 · 2 tan 45° / 600 = 1/30 unit.
+    /// let eps = view.eps_obj(&model, 0.5);
+    /// assert!((eps - 0.5 / 30.0).abs() < 1e-12);
+    /// ```
     pub fn eps_obj(&self, s: &Sphere, pixel_error: f64) -> f64 {
         let d = (s.center.distance(self.eye) - s.radius).max(self.near);
         pixel_error * self.pixel_size_at(d)
