@@ -10,16 +10,17 @@
 // tests; its Rust CPU twin is `render::fat_border::expand`. Keep all three in step.
 
 const FB_TINY: f32 = 1e-12;
-// Where the polyline turns by less than about 2.5° (cos > 0.999), s_{i-1}, t_i and s_i give
-// offsets within 0.1 % of each other: all three use t_i, so the joint fans of the 6- and
-// 4-vertex variants collapse to zero area and the rasterizer drops them at setup.
-const FB_STRAIGHT_COS: f32 = 0.999;
+// Bit 3 of a slot code: the joint at `cur` is straight (turns by less than ~8°, decided on the
+// CPU by `render::fat_border::is_straight`). Slots 1-3 (and 4-6) then all sit at the mitre
+// point ε·normalize(t × d)/cos(θ/2): the band stays at least ε wide and the joint fans have
+// zero area (their triangles are not drawn).
+const FB_STRAIGHT: u32 = 8u;
 
 // `v` normalised, or `fallback` when `v` is (nearly) zero.
 fn fb_normalize_or(v: vec3<f32>, fallback: vec3<f32>) -> vec3<f32> {
     let l2 = dot(v, v);
     if (l2 > FB_TINY * FB_TINY) {
-        return v * inverseSqrt(l2);
+        return v * (1.0 / sqrt(l2));
     }
     return fallback;
 }
@@ -39,36 +40,43 @@ fn fb_side(dir: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
     return normalize(cross(helper, d));
 }
 
-// World position of slot `slot` (0..6) of the fat border of `cur`.
+// World position of the displaced vertex `code` (slot 0..6, plus FB_STRAIGHT) of the fat
+// border of `cur`.
 fn fat_border_position(
     prev: vec3<f32>,
     cur: vec3<f32>,
     next: vec3<f32>,
     eye: vec3<f32>,
     eps: f32,
-    slot: u32,
+    code: u32,
 ) -> vec3<f32> {
+    let slot = code & 7u;
     let d = fb_normalize_or(eye - cur, vec3<f32>(0.0, 0.0, 1.0));
     let s_next0 = next - cur;
     let s_prev0 = cur - prev;
     let s_next = fb_normalize_or(s_next0, fb_normalize_or(s_prev0, vec3<f32>(1.0, 0.0, 0.0)));
     let s_prev = fb_normalize_or(s_prev0, s_next);
-    let t = fb_normalize_or(s_prev + s_next, s_next);
-    var dir_next = s_next;
-    var dir_prev = s_prev;
-    if (dot(s_prev, s_next) > FB_STRAIGHT_COS) {
-        dir_next = t;
-        dir_prev = t;
-    }
+    let sum = s_prev + s_next;
+    let t = fb_normalize_or(sum, s_next);
     var off = vec3<f32>(0.0, 0.0, 0.0);
-    switch slot {
-        case 1u: { off = fb_side(dir_next, d); }
-        case 2u: { off = fb_side(t, d); }
-        case 3u: { off = fb_side(dir_prev, d); }
-        case 4u: { off = fb_side(-dir_next, d); }
-        case 5u: { off = fb_side(-t, d); }
-        case 6u: { off = fb_side(-dir_prev, d); }
-        default: { off = vec3<f32>(0.0, 0.0, 0.0); }
+    if ((code & FB_STRAIGHT) != 0u) {
+        // 1 / cos(θ/2), with cos(θ/2) = |s_{i-1} + s_i| / 2.
+        let mitre = 2.0 / max(length(sum), 1.0);
+        if (slot >= 1u && slot <= 3u) {
+            off = fb_side(t, d) * mitre;
+        } else if (slot >= 4u && slot <= 6u) {
+            off = fb_side(-t, d) * mitre;
+        }
+    } else {
+        switch slot {
+            case 1u: { off = fb_side(s_next, d); }
+            case 2u: { off = fb_side(t, d); }
+            case 3u: { off = fb_side(s_prev, d); }
+            case 4u: { off = fb_side(-s_next, d); }
+            case 5u: { off = fb_side(-t, d); }
+            case 6u: { off = fb_side(-s_prev, d); }
+            default: { off = vec3<f32>(0.0, 0.0, 0.0); }
+        }
     }
     return cur + eps * off - eps * d;
 }

@@ -8,8 +8,8 @@ struct TwinInput {
     next: vec4<f32>,
     // xyz: eye, w: ε.
     eye_eps: vec4<f32>,
-    // x: slot.
-    slot: vec4<u32>,
+    // x: slot code (slot | FB_STRAIGHT).
+    code: vec4<u32>,
 };
 
 @group(0) @binding(0) var<storage, read> inputs: array<TwinInput>;
@@ -22,6 +22,6 @@ fn cs_expand(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let q = inputs[i];
-    let p = fat_border_position(q.prev.xyz, q.cur.xyz, q.next.xyz, q.eye_eps.xyz, q.eye_eps.w, q.slot.x);
+    let p = fat_border_position(q.prev.xyz, q.cur.xyz, q.next.xyz, q.eye_eps.xyz, q.eye_eps.w, q.code.x);
     outputs[i] = vec4<f32>(p, 1.0);
 }

@@ -42,7 +42,7 @@ fn vs_surface(
 }
 
 // One displaced fat-border vertex: border vertex `cur` with its neighbours on the border
-// polyline and the slot to expand (see `render::fat_border::BorderGeometry`).
+// polyline and the slot code to expand (see `render::fat_border::BorderGeometry`).
 @vertex
 fn vs_border(
     @location(0) prev: vec3<f32>,
@@ -51,9 +51,9 @@ fn vs_border(
     @location(3) normal: vec3<f32>,
     @location(4) eps: f32,
     @location(5) patch_id: u32,
-    @location(6) slot: u32,
+    @location(6) code: u32,
 ) -> VsOut {
-    let p = fat_border_position(prev, cur, next, globals.eye.xyz, eps, slot);
+    let p = fat_border_position(prev, cur, next, globals.eye.xyz, eps, code);
     var out: VsOut;
     out.clip = globals.view_proj * vec4<f32>(p, 1.0);
     // Shading attributes come from the original border vertex (paper, step 6).

@@ -5,7 +5,7 @@ mod common;
 
 use glam::Vec3;
 use patchwork::check::crack::SplitMix64;
-use patchwork::render::fat_border::expand;
+use patchwork::render::fat_border::{STRAIGHT_FLAG, expand, is_straight};
 use patchwork::render::shaders::FAT_BORDER_TWIN;
 use wgpu::util::DeviceExt;
 
@@ -16,7 +16,7 @@ struct TwinInput {
     cur: [f32; 4],
     next: [f32; 4],
     eye_eps: [f32; 4],
-    slot: [u32; 4],
+    code: [u32; 4],
 }
 
 fn inputs() -> Vec<(Vec3, Vec3, Vec3, Vec3, f32, u32)> {
@@ -30,17 +30,24 @@ fn inputs() -> Vec<(Vec3, Vec3, Vec3, Vec3, f32, u32)> {
         let eye = Vec3::new(r(20.0), r(20.0), r(20.0));
         let eps = (r(0.05)).abs() + 1e-4;
         for slot in 0..=6 {
+            // Both branches of the shader, whatever the joint.
             out.push((prev, cur, next, eye, eps, slot));
+            out.push((prev, cur, next, eye, eps, slot | STRAIGHT_FLAG));
         }
     }
-    // Nearly straight joints, on both sides of the threshold where the fans collapse.
+    // Joints on both sides of the straight threshold, flagged as the CPU decides.
     for k in 0..60 {
-        let angle = 0.001 * k as f32; // 0 .. 3.4°, the threshold is acos(0.999) ≈ 2.56°
+        let angle = 0.003 * k as f32; // 0 .. 10°, the threshold is acos(0.99) ≈ 8.1°
         let cur = Vec3::new(0.3, -0.2, 0.1);
         let prev = cur - Vec3::new(0.1, 0.0, 0.0);
         let next = cur + 0.1 * Vec3::new(angle.cos(), angle.sin(), 0.0);
+        let flag = if is_straight(prev, cur, next) {
+            STRAIGHT_FLAG
+        } else {
+            0
+        };
         for slot in 0..=6 {
-            out.push((prev, cur, next, Vec3::new(1.0, 2.0, 9.0), 0.02, slot));
+            out.push((prev, cur, next, Vec3::new(1.0, 2.0, 9.0), 0.02, slot | flag));
         }
     }
     // Degenerate cases: collapsed segments, a segment seen end-on, a 180° turn.
@@ -52,7 +59,7 @@ fn inputs() -> Vec<(Vec3, Vec3, Vec3, Vec3, f32, u32)> {
         (Vec3::new(0.0, 0.0, -1.0), z, Vec3::new(0.0, 0.0, 1.0)),
         (Vec3::X, z, Vec3::X),
     ] {
-        for slot in 0..=6 {
+        for slot in (0..=6).chain((0..=6).map(|s| s | STRAIGHT_FLAG)) {
             out.push((p, c, n, eye, 0.01, slot));
         }
     }
@@ -72,7 +79,7 @@ fn compute_twin_matches_cpu_twin() {
             cur: c.extend(1.0).into(),
             next: n.extend(1.0).into(),
             eye_eps: e.extend(eps).into(),
-            slot: [slot, 0, 0, 0],
+            code: [slot, 0, 0, 0],
         })
         .collect();
     let input = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -145,7 +152,7 @@ fn compute_twin_matches_cpu_twin() {
         // f32 rounding of a few normalisations: far below ε, the only scale that matters.
         assert!(
             err <= 1e-4 * eps + 4e-6 * (1.0 + c.length()),
-            "case {k} slot {slot}: cpu {cpu:?} gpu {g:?} (ε {eps})"
+            "case {k} code {slot}: cpu {cpu:?} gpu {g:?} (ε {eps})"
         );
     }
     eprintln!(

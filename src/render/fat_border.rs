@@ -10,6 +10,15 @@
 //! * 4 vertices: the same without v_i2, v_i5 (4 triangles);
 //! * 2 vertices: only v_i2, v_i5, one quad per segment (2 triangles).
 //!
+//! **Straight joints** (the polyline turns by less than 8°, [`STRAIGHT_COS`]): v_i1, v_i2, v_i3
+//! (and v_i4, v_i5, v_i6) all become the mitre point `ε·normalize(t_i × d_i) / cos(θ/2)`. The band
+//! is then at least ε wide perpendicular to both segments and covers the fan's round wedge (the
+//! mitre contains it), the displaced vertices move by under 0.4 % of ε, and the fans have zero
+//! area, so their triangles are left out of the index buffer: on the teapot about three joints
+//! in four are straight, which cuts the 6-vertex variant from 6 to 2 triangles there. The
+//! decision is made once, on the CPU ([`is_straight`]), and passed to the shader as a flag in
+//! the slot code, so both twins agree by construction.
+//!
 //! [`expand`] mirrors `fat_border_position` in `shaders/fat_border_lib.wgsl` operation by
 //! operation, in f32; a test runs the WGSL function in a compute twin and compares.
 
@@ -104,7 +113,7 @@ const TEMPLATE_4: [u32; 12] = [
 
 const TEMPLATE_2: [u32; 6] = [c(0, 2), c(0, 5), c(1, 5), c(0, 2), c(1, 5), c(1, 2)];
 
-/// Triangle-list template drawn once per border vertex (instance), as codes (see `c`).
+/// Triangle-list template drawn once per border vertex v_i, as codes (see `c`).
 pub fn template(variant: FatBorders) -> &'static [u32] {
     match variant {
         FatBorders::Off => &[],
@@ -119,10 +128,17 @@ pub fn decode(code: u32) -> (u32, u32) {
     ((code >> 3) & 1, code & 7)
 }
 
+/// A fan triangle: it contains v_i itself (slot 0 at end 0).
+fn is_fan(tri: &[u32]) -> bool {
+    tri.contains(&c(0, 0))
+}
+
 const TINY: f32 = 1e-12;
-/// Below this turn (cos of the angle between segments) s_{i−1}, t_i, s_i all use t_i, so the
-/// joint fans collapse to zero area (same constant as `FB_STRAIGHT_COS` in WGSL).
-pub const STRAIGHT_COS: f32 = 0.999;
+/// Joints where consecutive segments turn by less than acos(0.99) ≈ 8.1° are straight (see the
+/// module doc).
+pub const STRAIGHT_COS: f32 = 0.99;
+/// Flag in a slot code (bit 3): the border vertex's joint is straight (`FB_STRAIGHT` in WGSL).
+pub const STRAIGHT_FLAG: u32 = 8;
 
 fn normalize_or(v: Vec3, fallback: Vec3) -> Vec3 {
     let l2 = v.dot(v);
@@ -142,47 +158,54 @@ fn side(dir: Vec3, d: Vec3) -> Vec3 {
     helper.cross(d).normalize()
 }
 
-/// CPU twin of `fat_border_position` (WGSL): slot 0 = v_i pushed back, slots 1..6 = eq. (1)–(6).
-pub fn expand(prev: Vec3, cur: Vec3, next: Vec3, eye: Vec3, eps: f32, slot: u32) -> Vec3 {
-    let d = normalize_or(eye - cur, Vec3::Z);
+/// Segment directions (s_{i−1}, s_i) at `cur`, with the same fallbacks as the shader.
+fn segment_dirs(prev: Vec3, cur: Vec3, next: Vec3) -> (Vec3, Vec3) {
     let s_next0 = next - cur;
     let s_prev0 = cur - prev;
     let s_next = normalize_or(s_next0, normalize_or(s_prev0, Vec3::X));
     let s_prev = normalize_or(s_prev0, s_next);
-    let t = normalize_or(s_prev + s_next, s_next);
-    let (dir_next, dir_prev) = if s_prev.dot(s_next) > STRAIGHT_COS {
-        (t, t)
+    (s_prev, s_next)
+}
+
+/// Whether the border turns by less than acos([`STRAIGHT_COS`]) at `cur`.
+pub fn is_straight(prev: Vec3, cur: Vec3, next: Vec3) -> bool {
+    let (s_prev, s_next) = segment_dirs(prev, cur, next);
+    s_prev.dot(s_next) > STRAIGHT_COS
+}
+
+/// CPU twin of `fat_border_position` (WGSL). `code` = slot (0 = v_i pushed back, 1..6 = eq.
+/// (1)–(6)) plus [`STRAIGHT_FLAG`] for a straight joint.
+pub fn expand(prev: Vec3, cur: Vec3, next: Vec3, eye: Vec3, eps: f32, code: u32) -> Vec3 {
+    let slot = code & 7;
+    let d = normalize_or(eye - cur, Vec3::Z);
+    let (s_prev, s_next) = segment_dirs(prev, cur, next);
+    let sum = s_prev + s_next;
+    let t = normalize_or(sum, s_next);
+    let off = if code & STRAIGHT_FLAG != 0 {
+        // Mitre point: 1 / cos(θ/2), with cos(θ/2) = |s_{i−1} + s_i| / 2 ≥ 0.997 here.
+        let mitre = 2.0 / sum.length().max(1.0);
+        match slot {
+            1..=3 => side(t, d) * mitre,
+            4..=6 => side(-t, d) * mitre,
+            _ => Vec3::ZERO,
+        }
     } else {
-        (s_next, s_prev)
-    };
-    let off = match slot {
-        1 => side(dir_next, d),
-        2 => side(t, d),
-        3 => side(dir_prev, d),
-        4 => side(-dir_next, d),
-        5 => side(-t, d),
-        6 => side(-dir_prev, d),
-        _ => Vec3::ZERO,
+        match slot {
+            1 => side(s_next, d),
+            2 => side(t, d),
+            3 => side(s_prev, d),
+            4 => side(-s_next, d),
+            5 => side(-t, d),
+            6 => side(-s_prev, d),
+            _ => Vec3::ZERO,
+        }
     };
     cur + eps * off - eps * d
 }
 
-/// One border vertex as the GPU gets it: its neighbours, normals, ε and patch.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct BorderInstance {
-    pub prev: [f32; 3],
-    pub a: [f32; 3],
-    pub b: [f32; 3],
-    pub c: [f32; 3],
-    pub normal_a: [f32; 3],
-    pub normal_b: [f32; 3],
-    pub eps: f32,
-    pub patch_id: u32,
-}
-
 /// One displaced fat-border vertex as the GPU gets it: border vertex v_i (with its
-/// neighbours, normal, ε, patch) and the slot (0 = v_i, 1..6 = v_i1..v_i6).
+/// neighbours, normal, ε, patch) and its slot code (slot 0 = v_i, 1..6 = v_i1..v_i6, plus
+/// [`STRAIGHT_FLAG`]).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct BorderVertex {
@@ -192,7 +215,21 @@ pub struct BorderVertex {
     pub normal: [f32; 3],
     pub eps: f32,
     pub patch_id: u32,
-    pub slot: u32,
+    pub code: u32,
+}
+
+impl BorderVertex {
+    /// Where this vertex lands for an eye at `eye` (the CPU twin of the vertex shader).
+    pub fn expanded(&self, eye: Vec3) -> Vec3 {
+        expand(
+            self.prev.into(),
+            self.cur.into(),
+            self.next.into(),
+            eye,
+            self.eps,
+            self.code,
+        )
+    }
 }
 
 /// Slots per border vertex in [`BorderGeometry::vertices`].
@@ -201,7 +238,8 @@ pub const SLOTS: usize = 7;
 /// Fat-border geometry for one flat indexed draw: every border vertex expanded to its 7
 /// slots, and per variant the triangle indices of the template (a triangle may use slots of
 /// the next border vertex, so neighbouring border vertices share displaced vertices and each
-/// is shaded once). Unused slots are never indexed, hence never shaded.
+/// is shaded once; zero-area fans of straight joints are left out). Unused slots are never
+/// indexed, hence never shaded.
 #[derive(Clone, Debug, Default)]
 pub struct BorderGeometry {
     pub vertices: Vec<BorderVertex>,
@@ -210,6 +248,8 @@ pub struct BorderGeometry {
 }
 
 impl BorderGeometry {
+    /// The fat borders of every closed border loop of `meshes`, ε = each patch's
+    /// [`PatchMesh::eps_border`].
     pub fn of(meshes: &[PatchMesh]) -> BorderGeometry {
         let mut g = BorderGeometry::default();
         for m in meshes {
@@ -217,27 +257,37 @@ impl BorderGeometry {
             for ring in &m.borders {
                 let n = ring.len();
                 let base = g.vertices.len() as u32;
+                let mut straight = Vec::with_capacity(n);
                 for k in 0..n {
-                    let at = |o: usize| m.positions[ring[(k + o) % n] as usize].into();
+                    let at = |o: usize| m.positions[ring[(k + o) % n] as usize];
+                    let (prev, cur, next) = (at(n - 1), at(0), at(1));
+                    let flat = is_straight(prev, cur, next);
+                    straight.push(flat);
+                    let flag = if flat { STRAIGHT_FLAG } else { 0 };
                     for slot in 0..SLOTS as u32 {
                         g.vertices.push(BorderVertex {
-                            prev: at(n - 1),
-                            cur: at(0),
-                            next: at(1),
+                            prev: prev.into(),
+                            cur: cur.into(),
+                            next: next.into(),
                             normal: m.normals[ring[k] as usize].into(),
                             eps,
                             patch_id: m.patch_id,
-                            slot,
+                            code: slot | flag,
                         });
                     }
                 }
                 for (v, variant) in FatBorders::ALL_ON.iter().enumerate() {
                     for k in 0..n {
-                        g.indices[v].extend(template(*variant).iter().map(|&code| {
-                            let (end, slot) = decode(code);
-                            let j = (k + end as usize) % n;
-                            base + (j * SLOTS) as u32 + slot
-                        }));
+                        for tri in template(*variant).chunks_exact(3) {
+                            if straight[k] && is_fan(tri) {
+                                continue;
+                            }
+                            g.indices[v].extend(tri.iter().map(|&code| {
+                                let (end, slot) = decode(code);
+                                let j = (k + end as usize) % n;
+                                base + (j * SLOTS) as u32 + slot
+                            }));
+                        }
                     }
                 }
             }
@@ -253,55 +303,17 @@ impl BorderGeometry {
             FatBorders::Two => &self.indices[2],
         }
     }
-}
 
-/// Border instances of every closed border loop of `meshes`, ε = each patch's
-/// [`PatchMesh::eps_border`].
-pub fn border_instances(meshes: &[PatchMesh]) -> Vec<BorderInstance> {
-    let mut out = Vec::with_capacity(meshes.iter().map(PatchMesh::border_vertex_count).sum());
-    for m in meshes {
-        let eps = m.eps_border() as f32;
-        for ring in &m.borders {
-            let n = ring.len();
-            for k in 0..n {
-                let at = |o: usize| ring[(k + o) % n] as usize;
-                let (p, a, b, c) = (at(n - 1), at(0), at(1), at(2));
-                out.push(BorderInstance {
-                    prev: m.positions[p].into(),
-                    a: m.positions[a].into(),
-                    b: m.positions[b].into(),
-                    c: m.positions[c].into(),
-                    normal_a: m.normals[a].into(),
-                    normal_b: m.normals[b].into(),
-                    eps,
-                    patch_id: m.patch_id,
-                });
-            }
-        }
+    /// The fat-border triangles for an eye at `eye`, expanded on the CPU (world positions).
+    pub fn triangles(&self, variant: FatBorders, eye: Vec3) -> Vec<[Vec3; 3]> {
+        self.indices(variant)
+            .chunks_exact(3)
+            .map(|t| {
+                let v = |k: usize| self.vertices[t[k] as usize].expanded(eye);
+                [v(0), v(1), v(2)]
+            })
+            .collect()
     }
-    out
-}
-
-/// The fat-border triangles of one instance, expanded on the CPU (world positions).
-pub fn instance_triangles(inst: &BorderInstance, eye: Vec3, variant: FatBorders) -> Vec<[Vec3; 3]> {
-    let v = |code: u32| {
-        let (end, slot) = decode(code);
-        let (p, a, b, c) = (
-            Vec3::from(inst.prev),
-            Vec3::from(inst.a),
-            Vec3::from(inst.b),
-            Vec3::from(inst.c),
-        );
-        if end == 0 {
-            expand(p, a, b, eye, inst.eps, slot)
-        } else {
-            expand(a, b, c, eye, inst.eps, slot)
-        }
-    };
-    template(variant)
-        .chunks_exact(3)
-        .map(|t| [v(t[0]), v(t[1]), v(t[2])])
-        .collect()
 }
 
 #[cfg(test)]
@@ -313,8 +325,9 @@ mod tests {
         let (prev, cur, next) = (
             Vec3::new(-1.0, 0.0, 0.0),
             Vec3::ZERO,
-            Vec3::new(1.0, 0.2, 0.0),
+            Vec3::new(1.0, 0.5, 0.0),
         );
+        assert!(!is_straight(prev, cur, next));
         let eye = Vec3::new(0.0, 0.0, 10.0);
         let eps = 0.01;
         let d = (eye - cur).normalize();
@@ -330,6 +343,26 @@ mod tests {
     }
 
     #[test]
+    fn straight_joints_use_the_mitre_point() {
+        let (prev, cur) = (Vec3::new(-1.0, 0.0, 0.0), Vec3::ZERO);
+        let next = Vec3::new(1.0, 0.1, 0.0); // 5.7° turn
+        assert!(is_straight(prev, cur, next));
+        let eye = Vec3::new(0.0, 0.0, 10.0);
+        let eps = 0.01;
+        let d = (eye - cur).normalize();
+        let m: Vec<Vec3> = (1..=3)
+            .map(|s| expand(prev, cur, next, eye, eps, s | STRAIGHT_FLAG))
+            .collect();
+        assert!(m[0] == m[1] && m[1] == m[2], "collapsed fan: {m:?}");
+        // At least ε from both segment lines (in the view plane), at most 0.4 % more.
+        let off = m[0] - cur + eps * d;
+        for s in [Vec3::X, (next - cur).normalize()] {
+            let dist = (off - s * off.dot(s)).length();
+            assert!(dist >= eps * (1.0 - 1e-5) && dist <= eps * 1.004, "{dist}");
+        }
+    }
+
+    #[test]
     fn opposite_slots_are_on_opposite_sides() {
         let (prev, cur, next) = (
             Vec3::new(-1.0, 0.0, 0.0),
@@ -337,10 +370,13 @@ mod tests {
             Vec3::new(1.0, 0.5, 0.0),
         );
         let eye = Vec3::new(0.3, 0.1, 5.0);
-        for (a, b) in [(1, 4), (2, 5), (3, 6)] {
-            let pa = expand(prev, cur, next, eye, 0.1, a);
-            let pb = expand(prev, cur, next, eye, 0.1, b);
-            assert!((pa + pb - 2.0 * expand(prev, cur, next, eye, 0.1, 0)).length() < 1e-6);
+        for flag in [0, STRAIGHT_FLAG] {
+            for (a, b) in [(1, 4), (2, 5), (3, 6)] {
+                let pa = expand(prev, cur, next, eye, 0.1, a | flag);
+                let pb = expand(prev, cur, next, eye, 0.1, b | flag);
+                let centre = expand(prev, cur, next, eye, 0.1, flag);
+                assert!((pa + pb - 2.0 * centre).length() < 1e-6);
+            }
         }
     }
 
@@ -348,57 +384,17 @@ mod tests {
     fn degenerate_inputs_stay_finite() {
         let eye = Vec3::new(0.0, 0.0, 5.0);
         let z = Vec3::ZERO;
-        // Coincident neighbours, a segment pointing at the eye, eye on the vertex.
+        // Coincident neighbours, a segment pointing at the eye, eye on the vertex, a U-turn.
         let cases = [
             (z, z, z, eye),
             (z, z, Vec3::X, eye),
             (Vec3::new(0.0, 0.0, -1.0), z, Vec3::new(0.0, 0.0, 1.0), eye),
             (Vec3::X, z, -Vec3::X, z),
+            (Vec3::X, z, Vec3::X, eye),
         ];
         for (p, c0, n, e) in cases {
-            for slot in 0..=6 {
-                assert!(expand(p, c0, n, e, 0.1, slot).is_finite());
-            }
-        }
-    }
-
-    #[test]
-    fn geometry_indices_expand_to_the_cpu_twin_triangles() {
-        // A square loop: the GPU index lists must name, per border vertex, exactly the
-        // template's (end, slot) pairs.
-        let mesh = PatchMesh {
-            positions: vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y],
-            normals: vec![Vec3::Z; 4],
-            borders: vec![vec![0, 1, 2, 3]],
-            eps_target: 0.1,
-            ..PatchMesh::default()
-        };
-        let g = BorderGeometry::of(std::slice::from_ref(&mesh));
-        assert_eq!(g.vertices.len(), 4 * SLOTS);
-        let eye = Vec3::new(0.3, 0.2, 4.0);
-        let gpu_like = |i: u32| {
-            let v = g.vertices[i as usize];
-            expand(
-                v.prev.into(),
-                v.cur.into(),
-                v.next.into(),
-                eye,
-                v.eps,
-                v.slot,
-            )
-        };
-        let instances = border_instances(std::slice::from_ref(&mesh));
-        for variant in FatBorders::ALL_ON {
-            let idx = g.indices(variant);
-            let cpu: Vec<[Vec3; 3]> = instances
-                .iter()
-                .flat_map(|i| instance_triangles(i, eye, variant))
-                .collect();
-            assert_eq!(idx.len(), cpu.len() * 3, "{variant}");
-            for (t, tri) in idx.chunks_exact(3).zip(&cpu) {
-                for c in 0..3 {
-                    assert!((gpu_like(t[c]) - tri[c]).length() < 1e-6, "{variant}");
-                }
+            for code in (0..=6).chain((0..=6).map(|s| s | STRAIGHT_FLAG)) {
+                assert!(expand(p, c0, n, e, 0.1, code).is_finite());
             }
         }
     }
@@ -415,26 +411,80 @@ mod tests {
         assert!(slots(FatBorders::Two).iter().all(|&s| s == 2 || s == 5));
     }
 
+    /// A closed loop in the plane z = 0: a long straight-ish bottom edge with gentle bends
+    /// (straight joints), then sharp corners.
+    fn loop_mesh(eps: f64) -> PatchMesh {
+        let mut positions: Vec<Vec3> = (0..=10)
+            .map(|k| {
+                let x = k as f32 * 0.2;
+                Vec3::new(x, 0.01 * (x * 3.0).sin(), 0.0)
+            })
+            .collect();
+        positions.push(Vec3::new(2.0, 1.0, 0.0));
+        positions.push(Vec3::new(0.0, 1.0, 0.0));
+        let n = positions.len() as u32;
+        PatchMesh {
+            normals: vec![Vec3::Z; n as usize],
+            positions,
+            borders: vec![(0..n).collect()],
+            eps_target: eps,
+            ..PatchMesh::default()
+        }
+    }
+
     #[test]
-    fn band_covers_points_within_eps_of_a_straight_segment() {
-        // Looking straight down on a segment: every point within 0.9ε of it must lie in the
-        // projection of some fat-border triangle, for each variant.
-        let eye = Vec3::new(0.5, 0.0, 50.0);
-        let inst = BorderInstance {
-            prev: [-1.0, 0.0, 0.0],
-            a: [0.0, 0.0, 0.0],
-            b: [1.0, 0.0, 0.0],
-            c: [2.0, 0.0, 0.0],
-            eps: 0.05,
-            ..BorderInstance::default()
-        };
+    fn straight_joints_drop_their_fans() {
+        let g = BorderGeometry::of(&[loop_mesh(0.05)]);
+        let straight = g
+            .vertices
+            .iter()
+            .step_by(SLOTS)
+            .filter(|v| v.code & STRAIGHT_FLAG != 0)
+            .count();
+        assert!(straight >= 8, "{straight}");
+        let border_vertices = g.vertices.len() / SLOTS;
+        assert_eq!(
+            g.indices(FatBorders::Six).len() / 3,
+            6 * border_vertices - 4 * straight
+        );
+        assert_eq!(
+            g.indices(FatBorders::Four).len() / 3,
+            4 * border_vertices - 2 * straight
+        );
+        assert_eq!(g.indices(FatBorders::Two).len() / 3, 2 * border_vertices);
+    }
+
+    #[test]
+    fn band_covers_points_within_eps_of_the_border() {
+        // Looking straight down: every point within 0.95ε of the polyline must lie in the
+        // projection of some fat-border triangle, for each variant (6 and 4 everywhere; 2 away
+        // from the sharp corners, where the paper notes it is thinner).
+        let eps = 0.05f32;
+        let mesh = loop_mesh(eps as f64);
+        let g = BorderGeometry::of(std::slice::from_ref(&mesh));
+        let eye = Vec3::new(1.0, 0.5, 200.0);
+        let ring: Vec<Vec3> = mesh.positions.clone();
         for variant in FatBorders::ALL_ON {
-            let tris = instance_triangles(&inst, eye, variant);
-            for k in 0..=20 {
-                for side in [-0.9f32, 0.0, 0.9] {
-                    let q = glam::Vec2::new(k as f32 / 20.0, side * 0.05);
-                    let covered = tris.iter().any(|t| inside_xy(q, t));
-                    assert!(covered, "{variant}: {q:?} not covered");
+            let tris = g.triangles(variant, eye);
+            for w in 0..ring.len() {
+                let (a, b) = (ring[w], ring[(w + 1) % ring.len()]);
+                let dir = (b - a).normalize();
+                let normal = Vec3::new(-dir.y, dir.x, 0.0);
+                // The 2-vertex variant is thinner along segments ending at a sharp corner
+                // (ε·cos(θ/2) there, as the paper notes): test it on the others.
+                let corners = [0usize, 10, 11, 12];
+                let at_corner = corners.contains(&w) || corners.contains(&((w + 1) % ring.len()));
+                if variant == FatBorders::Two && at_corner {
+                    continue;
+                }
+                for k in 0..=10 {
+                    let f = k as f32 / 10.0;
+                    let on = a + (b - a) * f;
+                    for side in [-0.95f32, 0.0, 0.95] {
+                        let q = (on + normal * side * eps).truncate();
+                        let covered = tris.iter().any(|t| inside_xy(q, t));
+                        assert!(covered, "{variant}: {q:?} (edge {w}) not covered");
+                    }
                 }
             }
         }
