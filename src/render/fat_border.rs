@@ -277,9 +277,9 @@ impl BorderGeometry {
                     }
                 }
                 for (v, variant) in FatBorders::ALL_ON.iter().enumerate() {
-                    for k in 0..n {
+                    for (k, &flat) in straight.iter().enumerate() {
                         for tri in template(*variant).chunks_exact(3) {
-                            if straight[k] && is_fan(tri) {
+                            if flat && is_fan(tri) {
                                 continue;
                             }
                             g.indices[v].extend(tri.iter().map(|&code| {
