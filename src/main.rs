@@ -242,28 +242,35 @@ fn cmd_render(args: &RenderArgs) -> Result<(), CliError> {
     let t1 = Instant::now();
     let frame = renderer.render(&gpu, &view, &opts)?;
     let t_render = t1.elapsed();
+    // Render everything first, then write: a failure leaves no output at all.
+    let depth_image = match &args.depth_out {
+        Some(path) => {
+            let d = renderer.render(
+                &gpu,
+                &view,
+                &RenderOptions {
+                    depth: true,
+                    msaa: 1,
+                    ..opts
+                },
+            )?;
+            let depth = d.depth.unwrap_or_default();
+            let (near, far) = (view.near, view.far);
+            let img = image::ImageBuffer::from_fn(view.width, view.height, |x, y| {
+                let z = depth[(y * view.width + x) as usize] as f64;
+                let t = if z.is_finite() {
+                    ((z - near) / (far - near)).clamp(0.0, 1.0)
+                } else {
+                    1.0
+                };
+                image::Luma([(t * 65535.0).round() as u16])
+            });
+            Some((path, img))
+        }
+        None => None,
+    };
     png::write_rgba(&args.output, &frame.to_rgba_image())?;
-    if let Some(depth_path) = &args.depth_out {
-        let d = renderer.render(
-            &gpu,
-            &view,
-            &RenderOptions {
-                depth: true,
-                msaa: 1,
-                ..opts
-            },
-        )?;
-        let depth = d.depth.unwrap_or_default();
-        let (near, far) = (view.near, view.far);
-        let img = image::ImageBuffer::from_fn(view.width, view.height, |x, y| {
-            let z = depth[(y * view.width + x) as usize] as f64;
-            let t = if z.is_finite() {
-                ((z - near) / (far - near)).clamp(0.0, 1.0)
-            } else {
-                1.0
-            };
-            image::Luma([(t * 65535.0).round() as u16])
-        });
+    if let Some((depth_path, img)) = depth_image {
         png::write_gray16(depth_path, &img)?;
     }
     let s = MeshStats::of(&meshes);
