@@ -6,8 +6,9 @@
 //! llvmpipe pays a fixed cost per instance). Shading:
 //! `lit` (two-sided: CAD patches are not consistently oriented, so there is no back-face
 //! culling), `flat` (one colour) and `ids` (a colour per patch). Optionally a second pass at one
-//! sample writes the linear view-space depth into an `R32Float` target, for crack checks and
-//! `--depth-out`.
+//! sample writes the linear view-space depth (f32 bits in an `R32Uint` target: float targets
+//! are not renderable on GL), for crack checks and `--depth-out`. Render targets and the
+//! readback buffer are kept between frames of the same size.
 
 pub mod fat_border;
 pub mod gpu;
@@ -18,7 +19,7 @@ pub use gpu::{Gpu, RenderError};
 
 use std::collections::HashMap;
 
-use glam::{DVec3, Vec3};
+use glam::DVec3;
 use wgpu::util::DeviceExt;
 
 use crate::tessellate::PatchMesh;
@@ -116,8 +117,8 @@ struct SurfaceVertex {
     patch_id: u32,
 }
 
-/// Patch meshes uploaded to the GPU: one vertex/index buffer for all surfaces, one instance
-/// buffer for all border vertices.
+/// Patch meshes uploaded to the GPU: one vertex/index buffer for all surfaces, one vertex
+/// buffer of displaced fat-border vertices with an index buffer per variant.
 #[derive(Debug)]
 pub struct GpuMeshes {
     vertices: wgpu::Buffer,
@@ -321,7 +322,7 @@ impl Renderer {
         &self.gpu
     }
 
-    /// Uploads patch meshes (surfaces and border instances).
+    /// Uploads patch meshes: surfaces and fat-border geometry ([`BorderGeometry`]).
     pub fn upload(&self, meshes: &[PatchMesh]) -> GpuMeshes {
         let mut vertices = Vec::new();
         let mut indices: Vec<u32> = Vec::new();
@@ -702,9 +703,4 @@ fn read_texture(
     buffer.unmap();
     copied.map_err(|e| RenderError::Readback(e.to_string()))?;
     Ok(out)
-}
-
-/// Eye position as f32 (for CPU twins).
-pub fn eye_f32(view: &View) -> Vec3 {
-    view.eye.as_vec3()
 }
