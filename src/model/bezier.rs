@@ -43,6 +43,9 @@ pub struct BezierPatch {
     du: usize,
     dv: usize,
     ctrl: Vec<DVec3>,
+    /// Length of `S_u × S_v` below which a point counts as degenerate (scale² · 1e-9), computed
+    /// once: `normal` runs per tessellated vertex.
+    tiny_normal: f64,
 }
 
 /// Position and derivatives of a surface at one parameter point.
@@ -101,7 +104,18 @@ impl BezierPatch {
         if ctrl.iter().all(|p| *p == ctrl[0]) {
             return Err(PatchError::Degenerate);
         }
-        Ok(BezierPatch { du, dv, ctrl })
+        let tiny_normal = {
+            let r = Sphere::around(ctrl.iter().copied())
+                .radius
+                .max(f64::MIN_POSITIVE);
+            1e-9 * r * r
+        };
+        Ok(BezierPatch {
+            du,
+            dv,
+            ctrl,
+            tiny_normal,
+        })
     }
 
     pub fn degree(&self) -> (usize, usize) {
@@ -162,8 +176,7 @@ impl BezierPatch {
     /// row of control points coincides) the normal of nearby samples towards the patch centre is
     /// used; a fully flat-degenerate neighbourhood falls back to the control net's diagonals.
     pub fn normal(&self, u: f64, v: f64) -> DVec3 {
-        let scale = self.bounding_sphere().radius.max(f64::MIN_POSITIVE);
-        let tiny = 1e-9 * scale * scale;
+        let tiny = self.tiny_normal;
         let n = |u: f64, v: f64| {
             let s = self.eval_derivs(u, v);
             s.du.cross(s.dv)
