@@ -12,7 +12,9 @@
 //! found "abc"`. Readers never panic on malformed input.
 
 pub mod bpt;
+pub mod gltf_out;
 pub mod png;
+pub mod step;
 
 use std::path::{Path, PathBuf};
 

@@ -1,0 +1,1 @@
+//! glTF binary export (placeholder, being written).

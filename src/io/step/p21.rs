@@ -1,0 +1,1 @@
+//! ISO 10303-21 scanner (placeholder, being written).

@@ -1,0 +1,1 @@
+//! STEP product structure (placeholder, being written).
