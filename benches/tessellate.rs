@@ -15,7 +15,7 @@ use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use patchwork::model::Scene;
-use patchwork::tessellate::{BezierTessellator, MeshStats, PatchMesh, tessellate_scene};
+use patchwork::tessellate::{MeshStats, PatchMesh, Tessellators, tessellate_scene};
 use patchwork::view::{DEFAULT_FOV_Y_DEG, View};
 
 const PIXEL_ERRORS: [f64; 5] = [0.25, 0.5, 1.0, 2.0, 4.0];
@@ -66,14 +66,13 @@ fn tessellate_sequential(
     scene: &Scene,
     view: &View,
     px: f64,
-    t: &mut BezierTessellator,
+    t: &mut Tessellators,
     mesh: &mut PatchMesh,
 ) -> usize {
     let mut triangles = 0;
     for patch in &scene.patches {
         let eps = view.eps_obj(&patch.bounds, px);
-        t.tessellate(&patch.surface, eps, mesh);
-        mesh.patch_id = patch.id;
+        t.patch(patch, eps, mesh);
         triangles += black_box(&*mesh).triangles.len();
     }
     triangles
@@ -94,7 +93,7 @@ fn bench_tessellate(c: &mut Criterion) {
     group.finish();
 
     let mut group = c.benchmark_group("tessellate_single_thread");
-    let mut t = BezierTessellator::new();
+    let mut t = Tessellators::new();
     let mut mesh = PatchMesh::default();
     for px in PIXEL_ERRORS {
         let triangles = tessellate_sequential(&scene, &view, px, &mut t, &mut mesh);

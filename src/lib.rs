@@ -10,6 +10,7 @@
 
 pub mod check;
 pub mod io;
+pub mod isolate;
 pub mod model;
 pub mod render;
 pub mod tessellate;

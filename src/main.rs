@@ -60,7 +60,7 @@ struct CameraArgs {
 
 #[derive(Args, Debug)]
 struct RenderArgs {
-    /// Model file (.bpt).
+    /// Model file (.bpt, .step, .stp).
     file: PathBuf,
     /// Output PNG.
     #[arg(short, long)]
@@ -218,8 +218,37 @@ fn make_view(scene: &Scene, cam: &CameraArgs) -> Result<View, CliError> {
     Ok(view)
 }
 
+/// Loads a model and tells the user (stderr) what was left out and why.
 fn load(path: &Path) -> Result<Scene, CliError> {
-    Ok(io::load(path)?)
+    let scene = io::load(path)?;
+    for w in &scene.warnings {
+        eprintln!("warning: {}: {w}", path.display());
+    }
+    if !scene.skipped.is_empty() {
+        eprintln!(
+            "warning: {}: {} face(s) skipped:",
+            path.display(),
+            scene.skipped.len()
+        );
+        for s in &scene.skipped {
+            eprintln!("  face #{}: {}", s.face, s.reason);
+        }
+    }
+    Ok(scene)
+}
+
+/// Reports patches whose tessellation failed (their faces are not drawn in this frame).
+fn report_failures(meshes: &[patchwork::tessellate::PatchMesh]) {
+    let failed: Vec<&str> = meshes.iter().filter_map(|m| m.failure.as_deref()).collect();
+    if !failed.is_empty() {
+        eprintln!(
+            "warning: {} patch(es) could not be tessellated:",
+            failed.len()
+        );
+        for f in failed.iter().take(10) {
+            eprintln!("  {f}");
+        }
+    }
 }
 
 fn cmd_render(args: &RenderArgs) -> Result<(), CliError> {
@@ -228,6 +257,7 @@ fn cmd_render(args: &RenderArgs) -> Result<(), CliError> {
     let t0 = Instant::now();
     let meshes = tessellate_scene(&scene, &view, args.camera.pixel_error);
     let t_tess = t0.elapsed();
+    report_failures(&meshes);
     let mut renderer = Renderer::new()?;
     eprintln!("adapter: {}", renderer.gpu().describe());
     let gpu = renderer.upload(&meshes);

@@ -28,10 +28,11 @@ use std::path::PathBuf;
 
 use glam::{DVec3, Vec3};
 
-use crate::model::Scene;
+use crate::model::{PatchSurface, Scene};
 use crate::render::{FatBorders, Frame, RenderError, RenderOptions, Renderer, Shading};
 use crate::tessellate::{
-    BezierTessellator, MeshStats, PatchMesh, tessellate_scene, tessellate_scene_uniform,
+    BezierTessellator, MeshStats, PatchMesh, Resolution, tessellate_scene,
+    tessellate_scene_uniform, tessellate_scene_with,
 };
 use crate::view::View;
 
@@ -70,21 +71,40 @@ impl CrackCounts {
     }
 }
 
-/// Reference meshes for `view`: a shared uniform grid, welded along shared borders.
-/// Returns the meshes and the grid size.
+/// Reference meshes for `view`, welded along shared borders. Bézier patches: one shared
+/// uniform grid fine enough for every patch (returned as the grid size). Trimmed faces: every
+/// face at the smallest ε of the view (× [`REFERENCE_EPS_FRACTION`]) with border polylines
+/// that depend only on the curve and ε, so that shared edges get the same points (grid size 0).
 pub fn reference_meshes(scene: &Scene, view: &View, pixel_error: f64) -> (Vec<PatchMesh>, u32) {
-    let n = scene
+    let trimmed = scene
         .patches
         .iter()
-        .map(|p| {
-            let eps = view.eps_obj(&p.bounds, pixel_error) * REFERENCE_EPS_FRACTION;
-            let (r, _) = BezierTessellator::resolution_for(&p.surface, eps);
-            r.nu.max(r.nv)
-        })
-        .max()
-        .unwrap_or(1)
-        .clamp(1, MAX_REFERENCE_GRID);
-    let mut meshes = tessellate_scene_uniform(scene, n);
+        .any(|p| matches!(p.surface, PatchSurface::Trimmed(_)));
+    let mut n = 0;
+    let mut meshes = if trimmed {
+        let eps = scene
+            .patches
+            .iter()
+            .map(|p| view.eps_obj(&p.bounds, pixel_error) * REFERENCE_EPS_FRACTION)
+            .fold(f64::INFINITY, f64::min);
+        tessellate_scene_with(scene, eps, true)
+    } else {
+        n = scene
+            .patches
+            .iter()
+            .map(|p| {
+                let eps = view.eps_obj(&p.bounds, pixel_error) * REFERENCE_EPS_FRACTION;
+                let r = match &p.surface {
+                    PatchSurface::Bezier(b) => BezierTessellator::resolution_for(b, eps).0,
+                    PatchSurface::Trimmed(_) => Resolution { nu: 1, nv: 1 },
+                };
+                r.nu.max(r.nv)
+            })
+            .max()
+            .unwrap_or(1)
+            .clamp(1, MAX_REFERENCE_GRID);
+        tessellate_scene_uniform(scene, n)
+    };
     weld_borders(&mut meshes, (scene.bounds.radius * 1e-6) as f32);
     (meshes, n)
 }
@@ -105,11 +125,11 @@ pub fn weld_borders(meshes: &mut [PatchMesh], tol: f32) {
             'search: for dx in -1..=1 {
                 for dy in -1..=1 {
                     for dz in -1..=1 {
-                        if let Some(list) = grid.get(&(c + glam::IVec3::new(dx, dy, dz))) {
-                            if let Some(q) = list.iter().find(|q| q.distance(p) <= tol) {
-                                found = Some(*q);
-                                break 'search;
-                            }
+                        if let Some(list) = grid.get(&(c + glam::IVec3::new(dx, dy, dz)))
+                            && let Some(q) = list.iter().find(|q| q.distance(p) <= tol)
+                        {
+                            found = Some(*q);
+                            break 'search;
                         }
                     }
                 }

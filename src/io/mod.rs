@@ -5,6 +5,7 @@
 //! | extension | reader        | up axis |
 //! |-----------|---------------|---------|
 //! | `.bpt`    | [`bpt::read`] | z       |
+//! | `.step`, `.stp` | [`step::parse`] | z (CAD convention) |
 //!
 //! Every reader reports failures as a [`LoadError`] that names the file and, where the problem
 //! is at a place in the file, the 1-based line, so that its message reads like
@@ -70,9 +71,18 @@ pub enum LoadError {
         source: PatchError,
     },
 
+    /// The file was read but holds nothing to draw: no B-rep faces, or none that could be
+    /// used (`reason` says which, with the first faces' reasons).
+    #[error("{}: nothing to draw: {reason}", .path.display())]
+    NoFaces { path: PathBuf, reason: String },
+
+    /// The file passed our checks but a library reading it refused it.
+    #[error("{}: {reason}", .path.display())]
+    Unreadable { path: PathBuf, reason: String },
+
     /// No reader for this file extension (`extension` is empty when there is none).
     #[error(
-        "{}: unsupported model format {extension:?} (patchwork reads .bpt files)",
+        "{}: unsupported model format {extension:?} (patchwork reads .bpt, .step and .stp files)",
         .path.display()
     )]
     UnsupportedFormat { path: PathBuf, extension: String },
@@ -87,6 +97,8 @@ impl LoadError {
             | LoadError::Empty { path }
             | LoadError::Parse { path, .. }
             | LoadError::NoPatches { path }
+            | LoadError::NoFaces { path, .. }
+            | LoadError::Unreadable { path, .. }
             | LoadError::Patch { path, .. }
             | LoadError::UnsupportedFormat { path, .. } => path,
         }
@@ -113,6 +125,12 @@ pub fn load(path: &Path) -> Result<Scene, LoadError> {
     if extension.eq_ignore_ascii_case("bpt") {
         let patches = bpt::read(path)?;
         Ok(Scene::from_bezier(patches, UpAxis::Z))
+    } else if extension.eq_ignore_ascii_case("step") || extension.eq_ignore_ascii_case("stp") {
+        let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        step::parse(&bytes, path)
     } else {
         Err(LoadError::UnsupportedFormat {
             path: path.to_path_buf(),

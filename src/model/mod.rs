@@ -4,10 +4,14 @@
 //! [`crate::tessellate::PatchMesh`] for a view, `render` draws those.
 
 pub mod bezier;
+pub mod trimmed;
+
+use std::sync::Arc;
 
 pub use bezier::{BezierPatch, MAX_DEGREE};
+pub use trimmed::TrimmedFace;
 
-use glam::DVec3;
+use glam::{DMat4, DVec3};
 
 /// A bounding sphere (centre, radius), in object units.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -67,13 +71,58 @@ impl Sphere {
     }
 }
 
+/// The surface of a patch.
+#[derive(Clone, Debug)]
+pub enum PatchSurface {
+    Bezier(BezierPatch),
+    /// A trimmed face, shared by every placed instance of its part.
+    Trimmed(Arc<TrimmedFace>),
+}
+
 /// One independently tessellated surface piece.
 #[derive(Clone, Debug)]
 pub struct Patch {
     /// Index of the patch in its scene (also its colour in `ids` shading).
     pub id: u32,
-    pub surface: BezierPatch,
+    pub surface: PatchSurface,
+    /// Placement of the surface in the scene (object → world); identity outside assemblies.
+    pub transform: DMat4,
+    /// Bounds in world coordinates.
     pub bounds: Sphere,
+    /// Index into [`Scene::parts`].
+    pub part: u32,
+    /// Colour from the file (linear RGB 0–1), when it has one.
+    pub color: Option<[f32; 3]>,
+}
+
+impl Patch {
+    /// How much the placement scales lengths (1 for rigid placements).
+    pub fn scale(&self) -> f64 {
+        transform_scale(&self.transform)
+    }
+}
+
+/// Largest factor by which `m` stretches a length.
+pub fn transform_scale(m: &DMat4) -> f64 {
+    m.x_axis
+        .truncate()
+        .length()
+        .max(m.y_axis.truncate().length())
+        .max(m.z_axis.truncate().length())
+}
+
+/// A face the reader could not use, and why (the rest of the file is still drawn).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SkippedFace {
+    /// STEP entity id of the face.
+    pub face: u64,
+    pub reason: String,
+}
+
+/// A named part (a product of an assembly, or the whole model).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Part {
+    pub name: String,
 }
 
 /// Which world axis points up in a model's own convention.
@@ -99,18 +148,34 @@ pub struct Scene {
     /// Up axis by the file format's convention (used by the default camera).
     pub up: UpAxis,
     pub bounds: Sphere,
+    /// Axis-aligned box of the model (world), `(min, max)`.
+    pub bbox: (DVec3, DVec3),
+    pub parts: Vec<Part>,
+    /// Faces left out, with the reason.
+    pub skipped: Vec<SkippedFace>,
+    /// What the reader wants the user to know (unsupported entities, repairs).
+    pub warnings: Vec<String>,
 }
 
 impl Scene {
     /// Builds a scene from Bézier surfaces, numbering the patches in order.
     pub fn from_bezier(surfaces: Vec<BezierPatch>, up: UpAxis) -> Scene {
+        let bbox = box_of(
+            surfaces
+                .iter()
+                .flat_map(|s| s.control_points().iter().copied()),
+        )
+        .unwrap_or_default();
         let patches: Vec<Patch> = surfaces
             .into_iter()
             .enumerate()
             .map(|(i, surface)| Patch {
                 id: i as u32,
                 bounds: surface.bounding_sphere(),
-                surface,
+                surface: PatchSurface::Bezier(surface),
+                transform: DMat4::IDENTITY,
+                part: 0,
+                color: None,
             })
             .collect();
         let spheres: Vec<Sphere> = patches.iter().map(|p| p.bounds).collect();
@@ -118,6 +183,22 @@ impl Scene {
             bounds: Sphere::union(&spheres),
             patches,
             up,
+            bbox,
+            parts: vec![Part {
+                name: String::new(),
+            }],
+            skipped: Vec::new(),
+            warnings: Vec::new(),
         }
     }
+
+    /// Length of the diagonal of [`Scene::bbox`].
+    pub fn bbox_diagonal(&self) -> f64 {
+        self.bbox.0.distance(self.bbox.1)
+    }
+}
+
+/// Axis-aligned box around `points`, `None` when there are none.
+pub fn bounding_box(points: impl IntoIterator<Item = DVec3>) -> Option<(DVec3, DVec3)> {
+    box_of(points)
 }

@@ -5,13 +5,16 @@
 //! they are covered by fat borders at draw time (see `render::fat_border`).
 
 pub mod bezier;
+pub mod trimmed;
 
 pub use bezier::{BezierTessellator, MAX_SEGMENTS, Resolution};
+pub use trimmed::{TrimError, TrimmedTessellator};
 
-use glam::Vec3;
+use glam::{DMat3, DVec3, Vec3};
 use rayon::prelude::*;
 
-use crate::model::Scene;
+use crate::isolate::isolated;
+use crate::model::{Patch, PatchSurface, Scene};
 use crate::view::View;
 
 /// What is drawn for one patch: triangles, the closed border loops, and the error achieved.
@@ -30,6 +33,10 @@ pub struct PatchMesh {
     pub error: f64,
     /// Grid resolution used.
     pub resolution: Resolution,
+    /// Trimmed faces: largest sampled distance between a trim curve and its polyline.
+    pub trim_error: f64,
+    /// Why the patch could not be tessellated (its mesh is then empty).
+    pub failure: Option<String>,
 }
 
 impl PatchMesh {
@@ -43,31 +50,135 @@ impl PatchMesh {
     }
 }
 
+/// Both tessellators with their scratch buffers, one set per worker thread.
+#[derive(Debug, Default)]
+pub struct Tessellators {
+    pub bezier: BezierTessellator,
+    pub trimmed: TrimmedTessellator,
+}
+
+impl Tessellators {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Tessellates one patch to world tolerance `eps`, in world coordinates. A trimmed face
+    /// that fails (or panics inside truck) gives an empty mesh with `failure` set.
+    pub fn patch(&mut self, patch: &Patch, eps: f64, out: &mut PatchMesh) {
+        self.patch_with(patch, eps, false, out)
+    }
+
+    /// As [`Tessellators::patch`]; `shared_borders` keeps trim polylines to what depends on
+    /// the curve and ε alone, so faces tessellated with the same ε share border vertices
+    /// (used for watertight references).
+    pub fn patch_with(
+        &mut self,
+        patch: &Patch,
+        eps: f64,
+        shared_borders: bool,
+        out: &mut PatchMesh,
+    ) {
+        out.patch_id = patch.id;
+        out.failure = None;
+        out.trim_error = 0.0;
+        match &patch.surface {
+            PatchSurface::Bezier(b) => self.bezier.tessellate(b, eps, out),
+            PatchSurface::Trimmed(face) => {
+                let scale = patch.scale().max(1e-300);
+                let local = eps / scale;
+                let t = &mut self.trimmed;
+                let result = isolated(|| t.tessellate_with(face, local, shared_borders, out));
+                match result {
+                    Ok(Ok(report)) => {
+                        out.trim_error = report.trim_error * scale;
+                        out.error *= scale;
+                        out.eps_target = eps;
+                        place(out, patch);
+                    }
+                    Ok(Err(e)) => fail(out, eps, format!("face #{}: {e}", face.id)),
+                    Err(e) => {
+                        // The scratch state may be inconsistent after a panic.
+                        self.trimmed = TrimmedTessellator::new();
+                        fail(out, eps, format!("face #{}: {e}", face.id))
+                    }
+                }
+            }
+        }
+    }
+}
+
+fn fail(out: &mut PatchMesh, eps: f64, why: String) {
+    out.positions.clear();
+    out.normals.clear();
+    out.triangles.clear();
+    out.borders.clear();
+    out.error = 0.0;
+    out.eps_target = eps;
+    out.failure = Some(why);
+}
+
+/// Moves a mesh from its patch's own coordinates into the scene.
+fn place(out: &mut PatchMesh, patch: &Patch) {
+    let m = patch.transform;
+    if m == glam::DMat4::IDENTITY {
+        return;
+    }
+    let n = DMat3::from_mat4(m).inverse().transpose();
+    for p in out.positions.iter_mut() {
+        *p = m.transform_point3(p.as_dvec3()).as_vec3();
+    }
+    for v in out.normals.iter_mut() {
+        let t: DVec3 = n * v.as_dvec3();
+        *v = t.normalize_or_zero().as_vec3();
+    }
+}
+
 /// Tessellates every patch of `scene` for `view` at `pixel_error`, in parallel.
 pub fn tessellate_scene(scene: &Scene, view: &View, pixel_error: f64) -> Vec<PatchMesh> {
     scene
         .patches
         .par_iter()
-        .map_init(BezierTessellator::new, |t, patch| {
+        .map_init(Tessellators::new, |t, patch| {
             let eps = view.eps_obj(&patch.bounds, pixel_error);
             let mut mesh = PatchMesh::default();
-            t.tessellate(&patch.surface, eps, &mut mesh);
-            mesh.patch_id = patch.id;
+            t.patch(patch, eps, &mut mesh);
             mesh
         })
         .collect()
 }
 
-/// Tessellates every patch on one shared uniform `n × n` parameter grid (no error control).
-/// Patches sharing a border curve with the same parameterisation then share border vertices,
-/// which the crack check uses as its watertight reference.
+/// Tessellates every patch of `scene` to one world tolerance `tol` (view-independent, as a
+/// CAD exporter or a benchmark asks).
+pub fn tessellate_scene_tolerance(scene: &Scene, tol: f64) -> Vec<PatchMesh> {
+    tessellate_scene_with(scene, tol, false)
+}
+
+/// As [`tessellate_scene_tolerance`]; see [`Tessellators::patch_with`] for `shared_borders`.
+pub fn tessellate_scene_with(scene: &Scene, tol: f64, shared_borders: bool) -> Vec<PatchMesh> {
+    scene
+        .patches
+        .par_iter()
+        .map_init(Tessellators::new, |t, patch| {
+            let mut mesh = PatchMesh::default();
+            t.patch_with(patch, tol, shared_borders, &mut mesh);
+            mesh
+        })
+        .collect()
+}
+
+/// Tessellates every Bézier patch on one shared uniform `n × n` parameter grid (no error
+/// control). Patches sharing a border curve with the same parameterisation then share border
+/// vertices, which the crack check uses as its watertight reference. Trimmed faces are not
+/// on a common grid: they get an empty mesh here (see `check::crack::reference_meshes`).
 pub fn tessellate_scene_uniform(scene: &Scene, n: u32) -> Vec<PatchMesh> {
     scene
         .patches
         .par_iter()
         .map_init(BezierTessellator::new, |t, patch| {
             let mut mesh = PatchMesh::default();
-            t.tessellate_grid(&patch.surface, Resolution { nu: n, nv: n }, 0.0, &mut mesh);
+            if let PatchSurface::Bezier(b) = &patch.surface {
+                t.tessellate_grid(b, Resolution { nu: n, nv: n }, 0.0, &mut mesh);
+            }
             mesh.patch_id = patch.id;
             mesh
         })

@@ -1,4 +1,467 @@
-//! STEP (ISO 10303-21) reader: faces of B-rep shells → trimmed patches, placed by the assembly.
+//! STEP (ISO 10303-21, AP203/AP214/AP242) reader: every `ADVANCED_FACE` of every B-rep shell
+//! becomes a trimmed patch, placed by the product structure.
+//!
+//! Two passes over the file:
+//! * [`p21`] — our own scanner of the exchange structure: syntax errors with line and entity
+//!   number, and the entities truck does not model (products, assembly relations, placements,
+//!   styles) read by [`structure`];
+//! * truck-stepio — surfaces and curves (B-spline, NURBS, conics, elementary and swept
+//!   surfaces) and the face/loop/edge topology of each shell.
+//!
+//! A face whose surface, curves or trimming cannot be used is listed in
+//! [`crate::model::Scene::skipped`] with the reason and the rest is drawn; truck code that
+//! can panic runs under [`crate::isolate::isolated`]. Every face is tessellated once at load
+//! at a coarse tolerance: that gives its bounds and rejects faces that cannot be trimmed.
 
 pub mod p21;
 pub mod structure;
+
+use std::collections::{BTreeMap, HashMap};
+use std::path::Path;
+use std::sync::Arc;
+
+use glam::{DMat4, DVec3};
+use indicatif::{ProgressBar, ProgressStyle};
+use rayon::prelude::*;
+use truck_stepio::r#in::alias::re_exports::Point3;
+use truck_stepio::r#in::ruststep::ast::Name;
+use truck_stepio::r#in::ruststep::tables::{IntoOwned, PlaceHolder};
+use truck_stepio::r#in::{EdgeCurveHolder, FaceSurfaceHolder, Table};
+
+use super::LoadError;
+use crate::isolate::isolated;
+use crate::model::trimmed::{LoopEdge, TrimEdge, TruckSurface, to_dvec};
+use crate::model::{
+    Part, Patch, PatchSurface, Scene, SkippedFace, Sphere, TrimmedFace, UpAxis, bounding_box,
+    transform_scale,
+};
+use crate::tessellate::{PatchMesh, TrimmedTessellator};
+
+/// Coarse tolerance of the load-time tessellation, relative to a face's edge extent.
+const PROBE_TOLERANCE: f64 = 0.02;
+
+/// Reads a STEP file from bytes (`path` is for messages).
+pub fn parse(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
+    let p = || path.to_path_buf();
+    if bytes.iter().all(u8::is_ascii_whitespace) {
+        return Err(LoadError::Empty { path: p() });
+    }
+    if let Some(offset) = bytes.iter().position(|&b| b == 0) {
+        return Err(LoadError::NotText {
+            path: p(),
+            offset,
+            what: "a NUL byte",
+        });
+    }
+    // STEP strings may be Latin-1; only the structure (ASCII) matters here.
+    let text = String::from_utf8_lossy(bytes);
+    let file = p21::parse(&text).map_err(|e| LoadError::Parse {
+        path: p(),
+        line: e.line(),
+        reason: e.reason(),
+    })?;
+    let structure = structure::analyse(&file);
+    if structure.instances.is_empty() {
+        return Err(LoadError::NoFaces {
+            path: p(),
+            reason: format!(
+                "no B-rep shell (MANIFOLD_SOLID_BREP, BREP_WITH_VOIDS, SHELL_BASED_SURFACE_MODEL) among {} entities",
+                file.entities.len()
+            ),
+        });
+    }
+
+    // truck's view of the same data section.
+    let exchange =
+        truck_stepio::r#in::ruststep::parser::parse(&text).map_err(|e| LoadError::Unreadable {
+            path: p(),
+            reason: format!("STEP syntax not accepted by truck-stepio: {e}"),
+        })?;
+    let mut table = Table::default();
+    let mut unreadable: BTreeMap<String, usize> = BTreeMap::new();
+    for section in &exchange.data {
+        for inst in &section.entities {
+            if table.push_instance(inst).is_err() {
+                let name = match inst {
+                    truck_stepio::r#in::ruststep::ast::EntityInstance::Simple {
+                        record, ..
+                    } => record.name.clone(),
+                    _ => "complex entity".to_owned(),
+                };
+                *unreadable.entry(name).or_default() += 1;
+            }
+        }
+    }
+
+    let mut warnings = structure.warnings.clone();
+    if !structure.unsupported.is_empty() {
+        let list: Vec<String> = structure
+            .unsupported
+            .iter()
+            .map(|(n, c)| format!("{n} ×{c}"))
+            .collect();
+        warnings.push(format!(
+            "unsupported entities (not drawn): {}",
+            list.join(", ")
+        ));
+    }
+    if !unreadable.is_empty() {
+        let list: Vec<String> = unreadable
+            .iter()
+            .map(|(n, c)| format!("{n} ×{c}"))
+            .collect();
+        warnings.push(format!(
+            "entities truck-stepio could not read: {}",
+            list.join(", ")
+        ));
+    }
+
+    // Faces of every shell used, converted once and shared by the shell's instances.
+    let mut shells: Vec<u64> = structure.instances.iter().map(|i| i.shell).collect();
+    shells.sort_unstable();
+    shells.dedup();
+    let vertex_loops: std::collections::HashSet<u64> = file
+        .entities
+        .iter()
+        .filter(|e| e.has("VERTEX_LOOP"))
+        .map(|e| e.id)
+        .collect();
+    let mut face_ids: HashMap<u64, Vec<u64>> = HashMap::new();
+    let mut edges: HashMap<u64, Arc<TrimEdge>> = HashMap::new();
+    let mut converted: Vec<(u64, Result<TrimmedFace, String>)> = Vec::new();
+    for &shell in &shells {
+        let ids = shell_faces(&file, shell);
+        for &f in &ids {
+            let r = isolated(|| convert_face(&file, &table, &vertex_loops, f, &mut edges))
+                .and_then(|r| r)
+                .map_err(|e| e.to_string());
+            converted.push((f, r));
+        }
+        face_ids.insert(shell, ids);
+    }
+
+    // Probe tessellation: bounds, and faces that cannot be trimmed.
+    let pb = progress(converted.len(), "faces");
+    let probed: Vec<(u64, Result<Probed, String>)> = converted
+        .into_par_iter()
+        .map_init(TrimmedTessellator::new, |t, (id, r)| {
+            let out = r.and_then(|mut face| {
+                let (bounds, bbox) = probe(t, &face)?;
+                face.bounds = bounds;
+                Ok((face, bbox))
+            });
+            pb.inc(1);
+            (id, out)
+        })
+        .collect();
+    pb.finish_and_clear();
+
+    let mut faces: HashMap<u64, (Arc<TrimmedFace>, (DVec3, DVec3))> = HashMap::new();
+    let mut skipped = Vec::new();
+    for (id, r) in probed {
+        match r {
+            Ok((face, bbox)) => {
+                faces.insert(id, (Arc::new(face), bbox));
+            }
+            Err(reason) => skipped.push(SkippedFace { face: id, reason }),
+        }
+    }
+
+    let parts: Vec<Part> = structure
+        .parts
+        .iter()
+        .map(|p| Part {
+            name: p.name.clone(),
+        })
+        .collect();
+    // Scenes are in millimetres (the CAD default); files in other units are scaled.
+    let unit = structure
+        .length_unit_mm
+        .filter(|u| u.is_finite() && *u > 0.0)
+        .unwrap_or(1.0);
+    if unit != 1.0 {
+        warnings.push(format!("length unit is {unit} mm: scaled to millimetres"));
+    }
+    let mut patches = Vec::new();
+    let mut corners = Vec::new();
+    for inst in &structure.instances {
+        let transform = DMat4::from_scale(DVec3::splat(unit)) * inst.transform;
+        let scale = transform_scale(&transform);
+        for fid in face_ids.get(&inst.shell).into_iter().flatten() {
+            let Some((face, (lo, hi))) = faces.get(fid) else {
+                continue;
+            };
+            let color = structure
+                .colors
+                .get(fid)
+                .or_else(|| structure.colors.get(&inst.shell))
+                .or_else(|| inst.solid.and_then(|s| structure.colors.get(&s)))
+                .copied();
+            let bounds = Sphere {
+                center: transform.transform_point3(face.bounds.center),
+                radius: face.bounds.radius * scale,
+            };
+            for k in 0..8 {
+                let c = DVec3::new(
+                    if k & 1 == 0 { lo.x } else { hi.x },
+                    if k & 2 == 0 { lo.y } else { hi.y },
+                    if k & 4 == 0 { lo.z } else { hi.z },
+                );
+                corners.push(transform.transform_point3(c));
+            }
+            patches.push(Patch {
+                id: patches.len() as u32,
+                surface: PatchSurface::Trimmed(face.clone()),
+                transform,
+                bounds,
+                part: inst.part as u32,
+                color,
+            });
+        }
+    }
+    if patches.is_empty() {
+        let first: Vec<String> = skipped
+            .iter()
+            .take(3)
+            .map(|s| format!("#{}: {}", s.face, s.reason))
+            .collect();
+        return Err(LoadError::NoFaces {
+            path: p(),
+            reason: if skipped.is_empty() {
+                "its shells have no faces".to_owned()
+            } else {
+                format!(
+                    "none of its {} faces could be used ({})",
+                    skipped.len(),
+                    first.join("; ")
+                )
+            },
+        });
+    }
+    let spheres: Vec<Sphere> = patches.iter().map(|p| p.bounds).collect();
+    Ok(Scene {
+        bounds: Sphere::union(&spheres),
+        bbox: bounding_box(corners).unwrap_or_default(),
+        patches,
+        up: UpAxis::Z,
+        parts,
+        skipped,
+        warnings,
+    })
+}
+
+/// A face with its bounding box (own coordinates).
+type Probed = (TrimmedFace, (DVec3, DVec3));
+
+/// A progress bar on a terminal for long loads, hidden otherwise.
+fn progress(n: usize, what: &str) -> ProgressBar {
+    if n < 200 {
+        return ProgressBar::hidden();
+    }
+    let pb = ProgressBar::new(n as u64);
+    pb.set_style(
+        ProgressStyle::with_template(&format!("{{bar:40}} {{pos}}/{{len}} {what} {{elapsed}}"))
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    pb
+}
+
+/// Face entity ids of a shell (`CLOSED_SHELL(name, (faces…))`, also `OPEN_SHELL`,
+/// `ORIENTED_CLOSED_SHELL(name, *, #shell, orientation)`).
+fn shell_faces(file: &p21::P21File, shell: u64) -> Vec<u64> {
+    let Some(e) = file.get(shell) else {
+        return Vec::new();
+    };
+    let Some(rec) = e.parts.first() else {
+        return Vec::new();
+    };
+    if rec.name.starts_with("ORIENTED_") {
+        return rec
+            .args
+            .get(2)
+            .and_then(p21::Param::as_ref)
+            .map(|s| shell_faces(file, s))
+            .unwrap_or_default();
+    }
+    rec.args
+        .get(1)
+        .and_then(p21::Param::as_list)
+        .map(|l| l.iter().filter_map(p21::Param::as_ref).collect())
+        .unwrap_or_default()
+}
+
+fn entity_ref<T: Clone>(p: &PlaceHolder<T>, table: &HashMap<u64, T>) -> Option<(u64, T)> {
+    match p {
+        PlaceHolder::Ref(Name::Entity(id)) => table.get(id).cloned().map(|t| (*id, t)),
+        PlaceHolder::Owned(t) => Some((0, t.clone())),
+        _ => None,
+    }
+}
+
+/// One face with its surface and loops of edges (edges shared through `edges`).
+fn convert_face(
+    file: &p21::P21File,
+    table: &Table,
+    vertex_loops: &std::collections::HashSet<u64>,
+    id: u64,
+    edges: &mut HashMap<u64, Arc<TrimEdge>>,
+) -> Result<TrimmedFace, String> {
+    let face: FaceSurfaceHolder = if let Some(f) = table.face_surface.get(&id) {
+        f.clone()
+    } else if let Some(of) = table.oriented_face.get(&id) {
+        entity_ref(&of.face_element, &table.face_surface)
+            .map(|(_, f)| f)
+            .ok_or("oriented face without a readable face element")?
+    } else {
+        return Err(
+            "not a face truck-stepio could read (ADVANCED_FACE / FACE_SURFACE expected)".into(),
+        );
+    };
+    let surface_any = face
+        .face_geometry
+        .clone()
+        .into_owned(table)
+        .map_err(|e| format!("surface: {e}"))?;
+    let mut surface =
+        TruckSurface::try_from(&surface_any).map_err(|e| format!("surface not supported: {e}"))?;
+    if !surface_is_finite(&surface) {
+        // truck-stepio leaves NaNs in a plane whose placement has no usable reference
+        // direction; rebuild it from the placement as we read it.
+        surface = plane_from_file(file, id).ok_or("the surface has non-finite parameters")?;
+    }
+    let mut loops = Vec::new();
+    for b in &face.bounds {
+        let (_, bound) =
+            entity_ref(b, &table.face_bound).ok_or("face bound is not an EDGE_LOOP")?;
+        let Some((_, lp)) = entity_ref(&bound.bound, &table.edge_loop) else {
+            // A VERTEX_LOOP marks an apex or pole: a point, nothing to trim.
+            if let PlaceHolder::Ref(Name::Entity(l)) = &bound.bound
+                && vertex_loops.contains(l)
+            {
+                continue;
+            }
+            return Err("face bound is not an EDGE_LOOP (POLY_LOOP is not supported)".into());
+        };
+        let mut out: Vec<LoopEdge> = Vec::new();
+        for e in &lp.edge_list {
+            let PlaceHolder::Ref(Name::Entity(eid)) = e else {
+                return Err("inline edge in a loop".into());
+            };
+            let (ecid, forward) = if let Some(oe) = table.oriented_edge.get(eid) {
+                match &oe.edge_element {
+                    PlaceHolder::Ref(Name::Entity(i)) => (*i, oe.orientation),
+                    _ => return Err(format!("oriented edge #{eid} without an edge curve")),
+                }
+            } else {
+                (*eid, true)
+            };
+            let edge = match edges.get(&ecid) {
+                Some(e) => e.clone(),
+                None => {
+                    let holder: &EdgeCurveHolder = table
+                        .edge_curve
+                        .get(&ecid)
+                        .ok_or_else(|| format!("edge #{ecid} is not a readable EDGE_CURVE"))?;
+                    let e = convert_edge(table, ecid, holder)?;
+                    let e = Arc::new(e);
+                    edges.insert(ecid, e.clone());
+                    e
+                }
+            };
+            out.push(LoopEdge { edge, forward });
+        }
+        if !bound.orientation {
+            out.reverse();
+            for le in out.iter_mut() {
+                le.forward = !le.forward;
+            }
+        }
+        if !out.is_empty() {
+            loops.push(out);
+        }
+    }
+    if loops.is_empty() {
+        return Err("the face has no edge loop".into());
+    }
+    let pts: Vec<DVec3> = loops
+        .iter()
+        .flatten()
+        .flat_map(|le| {
+            [
+                le.edge.start,
+                le.edge.end,
+                le.edge.point(0.5 * (le.edge.t0 + le.edge.t1)),
+            ]
+        })
+        .collect();
+    let closed =
+        isolated(|| TrimmedFace::closed_directions(&surface, 1e-9)).unwrap_or((None, None));
+    Ok(TrimmedFace {
+        id,
+        closed,
+        surface,
+        loops,
+        domain_left: face.same_sense,
+        bounds: Sphere::around(pts.iter().copied()),
+    })
+}
+
+fn surface_is_finite(s: &TruckSurface) -> bool {
+    use crate::model::trimmed::SurfaceEval;
+    [(0.0, 0.0), (0.5, 0.5), (1.0, 1.0)]
+        .iter()
+        .all(|&(u, v)| s.point(glam::DVec2::new(u, v)).is_finite())
+}
+
+/// The plane of face `face` (`ADVANCED_FACE(name, bounds, #PLANE, sense)`) from its placement.
+fn plane_from_file(file: &p21::P21File, face: u64) -> Option<TruckSurface> {
+    use truck_stepio::r#in::alias::ElementarySurface;
+    use truck_stepio::r#in::alias::re_exports::Plane;
+    let f = file.get(face)?.record()?;
+    let plane = file.get(f.ref_at(2)?)?;
+    let rec = plane.part("PLANE")?;
+    let m = structure::placement(file, rec.ref_at(1)?)?;
+    let o = m.w_axis.truncate();
+    let (x, y) = (m.x_axis.truncate(), m.y_axis.truncate());
+    let pt = |v: DVec3| Point3::new(v.x, v.y, v.z);
+    let plane = Plane::new(pt(o), pt(o + x), pt(o + y));
+    let s = TruckSurface::ElementarySurface(Box::new(ElementarySurface::Plane(plane)));
+    surface_is_finite(&s).then_some(s)
+}
+
+fn convert_edge(table: &Table, id: u64, holder: &EdgeCurveHolder) -> Result<TrimEdge, String> {
+    let ec = holder
+        .clone()
+        .into_owned(table)
+        .map_err(|e| format!("edge #{id}: {e}"))?;
+    let start = to_dvec(Point3::from(&ec.edge_start.vertex_geometry));
+    let end = to_dvec(Point3::from(&ec.edge_end.vertex_geometry));
+    let curve = ec
+        .parse_curve3d()
+        .map_err(|e| format!("edge #{id}: curve not supported: {e}"))?;
+    let size = start.length().max(end.length()).max(start.distance(end));
+    let tol = 1e-4 * (1.0 + size);
+    TrimEdge::new(id, curve, start, end, tol)
+        .ok_or_else(|| format!("edge #{id}: its vertices are not on its curve"))
+}
+
+/// Coarse tessellation of a face: its bounding sphere (grown by the error) and box.
+fn probe(
+    t: &mut TrimmedTessellator,
+    face: &TrimmedFace,
+) -> Result<(Sphere, (DVec3, DVec3)), String> {
+    let tol = (face.bounds.radius * PROBE_TOLERANCE).max(1e-9);
+    let mut mesh = PatchMesh::default();
+    isolated(|| t.tessellate(face, tol, &mut mesh))?.map_err(|e| e.to_string())?;
+    let pts = mesh.positions.iter().map(|p| p.as_dvec3());
+    let s = Sphere::around(pts.clone());
+    let (lo, hi) = bounding_box(pts).ok_or("no vertices")?;
+    let grow = mesh.error + tol;
+    Ok((
+        Sphere {
+            center: s.center,
+            radius: s.radius + grow,
+        },
+        (lo - DVec3::splat(grow), hi + DVec3::splat(grow)),
+    ))
+}

@@ -1,0 +1,295 @@
+//! Trimmed surfaces: a parametric surface (B-spline, NURBS, plane, cylinder, cone, sphere,
+//! torus, swept curve — evaluated by truck) cut out by closed loops of 3D edge curves, as a
+//! STEP `ADVANCED_FACE` defines it. The loops are kept as 3D curves; their parameter-space image
+//! is computed by the tessellator for each tolerance (`tessellate::trimmed`).
+
+use std::sync::Arc;
+
+use glam::{DVec2, DVec3};
+use truck_stepio::r#in::alias::re_exports::{
+    ParametricCurve, ParametricSurface, Point3, SPHint2D, SearchNearestParameter, Vector3,
+};
+pub use truck_stepio::r#in::alias::{Curve3D, Surface as TruckSurface};
+
+use super::Sphere;
+
+pub(crate) fn to_dvec(p: Point3) -> DVec3 {
+    DVec3::new(p.x, p.y, p.z)
+}
+
+pub(crate) fn vec_to_dvec(v: Vector3) -> DVec3 {
+    DVec3::new(v.x, v.y, v.z)
+}
+
+pub(crate) fn to_point(p: DVec3) -> Point3 {
+    Point3::new(p.x, p.y, p.z)
+}
+
+/// One edge of a face boundary: a 3D curve between two vertices, run from `t0` to `t1`
+/// (`t0 > t1` when the curve runs against the edge).
+#[derive(Clone, Debug)]
+pub struct TrimEdge {
+    /// STEP entity id of the `EDGE_CURVE`.
+    pub id: u64,
+    pub curve: Curve3D,
+    pub t0: f64,
+    pub t1: f64,
+    /// The edge's vertices (exact end points of its polyline).
+    pub start: DVec3,
+    pub end: DVec3,
+}
+
+impl TrimEdge {
+    /// Builds an edge from a curve and its end vertices, finding the parameter range that runs
+    /// from `start` to `end`. `None` when the vertices are not on the curve (within `tol`) or
+    /// the curve is not finite there.
+    pub fn new(id: u64, curve: Curve3D, start: DVec3, end: DVec3, tol: f64) -> Option<TrimEdge> {
+        let (a, b) = curve.try_range_tuple()?;
+        if !(a.is_finite() && b.is_finite()) {
+            return None;
+        }
+        let pa = to_dvec(curve.subs(a));
+        let pb = to_dvec(curve.subs(b));
+        let (t0, t1) = if pa.distance(start) <= tol && pb.distance(end) <= tol {
+            (a, b)
+        } else if pb.distance(start) <= tol && pa.distance(end) <= tol {
+            (b, a)
+        } else {
+            // The curve is longer than the edge: locate the vertices on it.
+            let s = curve.search_nearest_parameter(to_point(start), None, 30)?;
+            let e = curve.search_nearest_parameter(to_point(end), None, 30)?;
+            if to_dvec(curve.subs(s)).distance(start) > tol
+                || to_dvec(curve.subs(e)).distance(end) > tol
+            {
+                return None;
+            }
+            let (s, e) = match curve.period() {
+                // A closed edge on a periodic curve runs once around.
+                Some(p) if (s - e).abs() < 1e-12 => (s, s + p),
+                _ => (s, e),
+            };
+            (s, e)
+        };
+        let mid = to_dvec(curve.subs(0.5 * (t0 + t1)));
+        if !(mid.is_finite() && start.is_finite() && end.is_finite()) {
+            return None;
+        }
+        Some(TrimEdge {
+            id,
+            curve,
+            t0,
+            t1,
+            start,
+            end,
+        })
+    }
+
+    /// Point at curve parameter `t`.
+    pub fn point(&self, t: f64) -> DVec3 {
+        to_dvec(self.curve.subs(t))
+    }
+
+    /// Whether the edge starts and ends at the same vertex.
+    pub fn is_closed(&self) -> bool {
+        self.start == self.end
+    }
+}
+
+/// An edge of a loop, with the direction the loop runs it.
+#[derive(Clone, Debug)]
+pub struct LoopEdge {
+    pub edge: Arc<TrimEdge>,
+    pub forward: bool,
+}
+
+/// A face: a surface and its boundary loops (outer and holes, in any order; the domain is
+/// what an even-odd rule over all loops encloses in parameter space).
+#[derive(Clone, Debug)]
+pub struct TrimmedFace {
+    /// STEP entity id of the face.
+    pub id: u64,
+    pub surface: TruckSurface,
+    /// Loops of edges, each running head to tail.
+    pub loops: Vec<Vec<LoopEdge>>,
+    /// Whether the face lies to the left of its loops in the surface's parameter space (the
+    /// STEP convention when the face's sense agrees with the surface's). Only needed for a
+    /// loop that runs once around a periodic surface and is closed by a pole or the parameter
+    /// range (a sphere cap, a cone up to its apex).
+    pub domain_left: bool,
+    /// Bounds in the face's own coordinates (before any assembly placement).
+    pub bounds: Sphere,
+    /// Directions in which the surface closes on itself without being periodic (a revolved
+    /// NURBS: S(u_min, v) = S(u_max, v)): `(start, period)`. The tessellator unwraps border
+    /// parameters across that seam as for a periodic surface, and evaluation wraps back.
+    pub closed: (Interval, Interval),
+}
+
+impl TrimmedFace {
+    /// Detects directions in which `surface` closes on itself (see [`TrimmedFace::closed`]),
+    /// to relative tolerance `tol` of its size.
+    pub fn closed_directions(surface: &TruckSurface, tol: f64) -> (Interval, Interval) {
+        let (ru, rv) = parameter_bounds(surface);
+        let (pu, pv) = (surface.u_period(), surface.v_period());
+        let (Some((u0, u1)), Some((v0, v1))) = (ru, rv) else {
+            return (None, None);
+        };
+        let at = |u: f64, v: f64| to_dvec(surface.subs(u, v));
+        let size = at(u0, v0)
+            .distance(at(u1, v1))
+            .max(at(u0, v1).distance(at(u1, v0)));
+        let size = size.max(at(0.5 * (u0 + u1), 0.5 * (v0 + v1)).distance(at(u0, v0)));
+        let eps = tol * size.max(1e-12);
+        let closes = |f: &dyn Fn(f64) -> f64| (0..=6).all(|k| f(k as f64 / 6.0) <= eps);
+        let cu = (pu.is_none()
+            && u1 > u0
+            && closes(&|t| at(u0, v0 + (v1 - v0) * t).distance(at(u1, v0 + (v1 - v0) * t))))
+        .then_some((u0, u1 - u0));
+        let cv = (pv.is_none()
+            && v1 > v0
+            && closes(&|t| at(u0 + (u1 - u0) * t, v0).distance(at(u0 + (u1 - u0) * t, v1))))
+        .then_some((v0, v1 - v0));
+        (cu, cv)
+    }
+
+    /// Nearest of a 24 × 24 grid of parameters over the finite range (truck's searches need a
+    /// start on some surfaces).
+    fn coarse_guess(&self, p: DVec3) -> Option<DVec2> {
+        let (ru, rv) = parameter_bounds(&self.surface);
+        let (pu, pv) = self.surface.periods();
+        let (u0, u1) = ru.or(pu.map(|p| (0.0, p)))?;
+        let (v0, v1) = rv.or(pv.map(|p| (0.0, p)))?;
+        const N: usize = 24;
+        let mut best = (f64::INFINITY, DVec2::ZERO);
+        for i in 0..=N {
+            for j in 0..=N {
+                let uv = DVec2::new(
+                    u0 + (u1 - u0) * i as f64 / N as f64,
+                    v0 + (v1 - v0) * j as f64 / N as f64,
+                );
+                let d = self.surface.point(uv).distance_squared(p);
+                if d < best.0 {
+                    best = (d, uv);
+                }
+            }
+        }
+        best.0.is_finite().then_some(best.1)
+    }
+
+    /// Gauss–Newton on |S(u, v) − p|² from `uv` (fallback when truck's search gives up).
+    fn newton(&self, p: DVec3, mut uv: DVec2) -> Option<DVec2> {
+        for _ in 0..40 {
+            let s = self.surface.point(uv);
+            let (su, sv) = self.surface.derivs(uv);
+            let r = s - p;
+            let (a, b, c) = (su.dot(su), su.dot(sv), sv.dot(sv));
+            let det = a * c - b * b;
+            if det.abs() <= 1e-300 || det.is_nan() {
+                break;
+            }
+            let (gu, gv) = (su.dot(r), sv.dot(r));
+            let step = DVec2::new((c * gu - b * gv) / det, (a * gv - b * gu) / det);
+            uv -= step;
+            if !uv.is_finite() {
+                return None;
+            }
+            if step.length() < 1e-12 * (1.0 + uv.length()) {
+                break;
+            }
+        }
+        uv.is_finite().then_some(uv)
+    }
+
+    fn wrap(&self, uv: DVec2) -> DVec2 {
+        let w = |x: f64, c: Interval| match c {
+            Some((a, p)) if p > 0.0 => a + (x - a).rem_euclid(p),
+            _ => x,
+        };
+        DVec2::new(w(uv.x, self.closed.0), w(uv.y, self.closed.1))
+    }
+}
+
+impl SurfaceEval for TrimmedFace {
+    fn point(&self, uv: DVec2) -> DVec3 {
+        self.surface.point(self.wrap(uv))
+    }
+
+    fn derivs(&self, uv: DVec2) -> (DVec3, DVec3) {
+        self.surface.derivs(self.wrap(uv))
+    }
+
+    fn second_derivs(&self, uv: DVec2) -> (DVec3, DVec3, DVec3) {
+        self.surface.second_derivs(self.wrap(uv))
+    }
+
+    fn project(&self, p: DVec3, hint: Option<DVec2>) -> Option<DVec2> {
+        let hint = hint.map(|h| self.wrap(h)).or_else(|| self.coarse_guess(p));
+        self.surface
+            .project(p, hint)
+            .or_else(|| hint.and_then(|h| self.newton(p, h)))
+    }
+
+    fn periods(&self) -> (Option<f64>, Option<f64>) {
+        let (pu, pv) = self.surface.periods();
+        (
+            pu.or(self.closed.0.map(|c| c.1)),
+            pv.or(self.closed.1.map(|c| c.1)),
+        )
+    }
+}
+
+/// Surface evaluation in glam types.
+pub trait SurfaceEval {
+    fn point(&self, uv: DVec2) -> DVec3;
+    /// (∂S/∂u, ∂S/∂v)
+    fn derivs(&self, uv: DVec2) -> (DVec3, DVec3);
+    /// (S_uu, S_uv, S_vv)
+    fn second_derivs(&self, uv: DVec2) -> (DVec3, DVec3, DVec3);
+    /// Parameter of the point nearest to `p`, searched from `hint` when given.
+    fn project(&self, p: DVec3, hint: Option<DVec2>) -> Option<DVec2>;
+    fn periods(&self) -> (Option<f64>, Option<f64>);
+}
+
+impl SurfaceEval for TruckSurface {
+    fn point(&self, uv: DVec2) -> DVec3 {
+        to_dvec(self.subs(uv.x, uv.y))
+    }
+
+    fn derivs(&self, uv: DVec2) -> (DVec3, DVec3) {
+        (
+            vec_to_dvec(self.uder(uv.x, uv.y)),
+            vec_to_dvec(self.vder(uv.x, uv.y)),
+        )
+    }
+
+    fn second_derivs(&self, uv: DVec2) -> (DVec3, DVec3, DVec3) {
+        (
+            vec_to_dvec(self.uuder(uv.x, uv.y)),
+            vec_to_dvec(self.uvder(uv.x, uv.y)),
+            vec_to_dvec(self.vvder(uv.x, uv.y)),
+        )
+    }
+
+    fn project(&self, p: DVec3, hint: Option<DVec2>) -> Option<DVec2> {
+        let h = match hint {
+            Some(h) => SPHint2D::Parameter(h.x, h.y),
+            None => SPHint2D::None,
+        };
+        let (u, v) = self.search_nearest_parameter(to_point(p), h, 40)?;
+        let uv = DVec2::new(u, v);
+        uv.is_finite().then_some(uv)
+    }
+
+    fn periods(&self) -> (Option<f64>, Option<f64>) {
+        (self.u_period(), self.v_period())
+    }
+}
+
+/// A finite parameter interval, `None` when unbounded.
+pub type Interval = Option<(f64, f64)>;
+
+/// The finite parameter range of a surface, per direction.
+pub fn parameter_bounds(s: &TruckSurface) -> (Interval, Interval) {
+    let (u, v) = s.try_range_tuple();
+    let finite = |r: Option<(f64, f64)>| r.filter(|(a, b)| a.is_finite() && b.is_finite());
+    (finite(u), finite(v))
+}

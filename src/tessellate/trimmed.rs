@@ -1,0 +1,897 @@
+//! Trimmed-face tessellation under a tolerance, after the on-the-fly NURBS tessellation of
+//! Balázs, Guthe and Klein, "Fat Borders" (2004), §5: every face on its own, its border the
+//! polyline of its trim curves, so neighbours need not agree and fat borders close the gaps.
+//!
+//! For a tolerance ε:
+//! 1. **Trim polylines** — every edge curve is split until the chord deviates from the curve
+//!    by at most ε/2 (3 samples per segment), from the edge's own start vertex, so a shared
+//!    edge gives the same points to both faces when their ε agree. The vertices are the exact
+//!    STEP vertices.
+//! 2. **Parameter space** — each point is projected onto the surface (nearest parameter, from
+//!    the previous point), unwrapped across the seams of periodic surfaces; at poles (a
+//!    vanishing derivative) the free coordinate follows the neighbouring point. A segment is
+//!    split again until the surface at the middle of its parameter chord is within ε/2 of the
+//!    3D chord, so triangles along the border hold ε too. Loops that run around a periodic
+//!    surface are joined to a second such loop, or closed along a pole / the parameter range.
+//! 3. **Interior** — a grid whose steps follow from ε and the largest second derivatives
+//!    sampled on the domain (`(M_uu h_u² + 2 M_uv h_u h_v + M_vv h_v²)/8 ≤ ε`), points
+//!    strictly inside the trimmed domain and away from its border.
+//! 4. **Constrained Delaunay** (spade) of grid and border in a parameter space scaled by the
+//!    mean speeds |S_u|, |S_v|; triangles outside the domain are dropped (parity across the
+//!    constraint edges).
+//! 5. **Measured error** — the distance between the surface and the triangle at 7 samples per
+//!    triangle (centroid, edge midpoints, inner points); triangles above ε get their centroid
+//!    inserted, for a few rounds. The maximum measured is returned with the mesh.
+
+use std::collections::VecDeque;
+
+use glam::{DVec2, DVec3, Vec3};
+use spade::handles::FixedVertexHandle;
+use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation};
+
+use super::{PatchMesh, Resolution};
+use crate::model::trimmed::{LoopEdge, SurfaceEval, TrimmedFace, parameter_bounds};
+
+/// Most segments one edge polyline may have.
+const MAX_EDGE_SEGMENTS: usize = 1 << 14;
+/// Most grid steps per direction.
+const MAX_GRID: usize = 400;
+/// Rounds of error-driven refinement.
+const REFINE_ROUNDS: usize = 10;
+/// Most vertices per face.
+const MAX_VERTICES: usize = 400_000;
+
+/// Why a face could not be tessellated.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum TrimError {
+    #[error("the face has no boundary loop")]
+    NoLoops,
+    #[error("edge #{edge}: projecting its points onto the surface failed")]
+    Projection { edge: u64 },
+    #[error(
+        "a loop runs around the periodic surface and the surface has no finite range to close it"
+    )]
+    UnboundedWrap,
+    #[error("{0} loops run around the periodic surface; only 1 or 2 are supported")]
+    WrapCount(usize),
+    #[error("the trimmed domain is empty")]
+    EmptyDomain,
+    #[error("non-finite value while tessellating")]
+    NotFinite,
+}
+
+/// A border point: 3D position (on the trim curve), parameter, and where it came from on its
+/// edge (to split the segment on the curve), `None` for points of a closing line.
+#[derive(Clone, Copy, Debug)]
+struct BPoint {
+    p: DVec3,
+    uv: DVec2,
+    src: Option<(u32, u32, f64)>,
+}
+
+/// Reusable trimmed-face tessellator (keeps its scratch buffers).
+#[derive(Debug, Default)]
+pub struct TrimmedTessellator {
+    loops: Vec<Vec<BPoint>>,
+    uvs: Vec<DVec2>,
+    pos: Vec<DVec3>,
+}
+
+/// What the tessellator achieved besides the mesh.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TrimReport {
+    /// Largest sampled distance between a trim curve and its polyline.
+    pub trim_error: f64,
+    /// Edge constraints spade could not add (crossing trim polylines).
+    pub crossing_constraints: usize,
+}
+
+impl TrimmedTessellator {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Tessellates `face` (in its own coordinates) to tolerance `eps`, into `out` (cleared).
+    pub fn tessellate(
+        &mut self,
+        face: &TrimmedFace,
+        eps: f64,
+        out: &mut PatchMesh,
+    ) -> Result<TrimReport, TrimError> {
+        self.tessellate_with(face, eps, false, out)
+    }
+
+    /// As [`TrimmedTessellator::tessellate`]. With `shared_borders`, border segments are not
+    /// split by the surface criterion of step 2 (which depends on the face), so two faces
+    /// tessellated with the same ε share their border points exactly.
+    pub fn tessellate_with(
+        &mut self,
+        face: &TrimmedFace,
+        eps: f64,
+        shared_borders: bool,
+        out: &mut PatchMesh,
+    ) -> Result<TrimReport, TrimError> {
+        let eps = if eps.is_finite() && eps > 0.0 {
+            eps
+        } else {
+            face.bounds.radius.max(1e-9) * 1e-3
+        };
+        out.positions.clear();
+        out.normals.clear();
+        out.triangles.clear();
+        out.borders.clear();
+        out.eps_target = eps;
+        out.error = 0.0;
+        let s = face;
+        let mut report = TrimReport::default();
+        if face.loops.is_empty() {
+            return Err(TrimError::NoLoops);
+        }
+
+        // 1 + 2: border polylines in 3D and parameter space.
+        self.loops.clear();
+        for (li, lp) in face.loops.iter().enumerate() {
+            let pts = self.loop_points(face, li, lp, eps, &mut report)?;
+            if pts.len() >= 2 {
+                self.loops.push(pts);
+            }
+        }
+        let mut loops = std::mem::take(&mut self.loops);
+        close_wrapping_loops(face, &mut loops, eps)?;
+        for lp in loops.iter_mut() {
+            if !shared_borders {
+                refine_border(face, lp, eps * 0.5);
+            }
+            fix_poles(s, lp);
+        }
+        if loops.iter().all(|l| l.len() < 3) {
+            return Err(TrimError::EmptyDomain);
+        }
+
+        // 3: interior grid.
+        let (lo, hi) = uv_box(&loops);
+        let (scale, steps) = grid_steps(s, lo, hi, eps);
+        let segs = segments(&loops);
+
+        // 4: constrained Delaunay in scaled parameter space.
+        let mut cdt: ConstrainedDelaunayTriangulation<Point2<f64>> =
+            ConstrainedDelaunayTriangulation::new();
+        self.uvs.clear();
+        self.pos.clear();
+        let mut border_ids: Vec<Vec<u32>> = Vec::with_capacity(loops.len());
+        for lp in &loops {
+            let mut ids = Vec::with_capacity(lp.len());
+            for b in lp {
+                let h = self.insert(&mut cdt, scale, b.uv, Some(b.p), s)?;
+                ids.push(h.index() as u32);
+            }
+            border_ids.push(ids);
+        }
+        for ids in &border_ids {
+            for k in 0..ids.len() {
+                let (a, b) = (ids[k], ids[(k + 1) % ids.len()]);
+                if a == b {
+                    continue;
+                }
+                let fa = FixedVertexHandle::from_index(a as usize);
+                let fb = FixedVertexHandle::from_index(b as usize);
+                if cdt.can_add_constraint(fa, fb) {
+                    cdt.add_constraint(fa, fb);
+                } else {
+                    report.crossing_constraints += 1;
+                }
+            }
+        }
+        let (nu, nv) = steps;
+        let du = (hi.x - lo.x) / nu as f64;
+        let dv = (hi.y - lo.y) / nv as f64;
+        if nu > 1 || nv > 1 {
+            let near = border_cells(&segs, lo, du, dv, nu, nv);
+            for i in 1..nu {
+                for j in 1..nv {
+                    // Skip grid points at corners of cells the border passes through.
+                    let touched = near[(i - 1) * nv + (j - 1)]
+                        || near[i * nv + (j - 1)]
+                        || near[(i - 1) * nv + j]
+                        || near[i * nv + j];
+                    if touched {
+                        continue;
+                    }
+                    let uv = DVec2::new(lo.x + i as f64 * du, lo.y + j as f64 * dv);
+                    if inside(&segs, uv) {
+                        self.insert(&mut cdt, scale, uv, None, s)?;
+                    }
+                }
+            }
+        }
+        out.resolution = Resolution {
+            nu: nu as u32,
+            nv: nv as u32,
+        };
+
+        // 5: error-driven refinement.
+        let use_parity = report.crossing_constraints == 0;
+        let mut tris = Vec::new();
+        // Refinement may at most multiply the initial vertex count (a misbehaving surface
+        // must not eat the machine); the measured error then tells the truth.
+        let vertex_cap = (16 * self.uvs.len() + 20_000).min(MAX_VERTICES);
+        for _round in 0..=REFINE_ROUNDS {
+            tris.clear();
+            let inside_faces = self.inside_faces(&cdt, &segs, use_parity);
+            let mut worst = 0.0f64;
+            let mut to_insert = Vec::new();
+            for t in inside_faces {
+                let e = self.triangle_error(s, t);
+                worst = worst.max(e);
+                if e > eps {
+                    let c = (self.uvs[t[0] as usize]
+                        + self.uvs[t[1] as usize]
+                        + self.uvs[t[2] as usize])
+                        / 3.0;
+                    to_insert.push(c);
+                }
+                tris.push(t);
+            }
+            out.error = worst;
+            if to_insert.is_empty() || self.uvs.len() + to_insert.len() > vertex_cap {
+                break;
+            }
+            for uv in to_insert {
+                self.insert(&mut cdt, scale, uv, None, s)?;
+            }
+        }
+        if tris.is_empty() {
+            return Err(TrimError::EmptyDomain);
+        }
+
+        // Output: used vertices only.
+        let mut remap = vec![u32::MAX; self.uvs.len()];
+        let mut take = |i: u32, out: &mut PatchMesh| -> u32 {
+            let r = &mut remap[i as usize];
+            if *r == u32::MAX {
+                *r = out.positions.len() as u32;
+                out.positions.push(self.pos[i as usize].as_vec3());
+                out.normals
+                    .push(normal_at(s, self.uvs[i as usize], lo, hi, face));
+            }
+            *r
+        };
+        for t in &tris {
+            let tri = [take(t[0], out), take(t[1], out), take(t[2], out)];
+            out.triangles.push(tri);
+        }
+        for ids in &border_ids {
+            let mut ring: Vec<u32> = Vec::with_capacity(ids.len());
+            for &i in ids {
+                let r = take(i, out);
+                let p = out.positions[r as usize];
+                if ring.last().is_some_and(|&l| out.positions[l as usize] == p) {
+                    continue;
+                }
+                ring.push(r);
+            }
+            while ring.len() > 1
+                && out.positions[ring[0] as usize] == out.positions[ring[ring.len() - 1] as usize]
+            {
+                ring.pop();
+            }
+            if ring.len() >= 2 {
+                out.borders.push(ring);
+            }
+        }
+        if !out.positions.iter().all(|p| p.is_finite()) {
+            return Err(TrimError::NotFinite);
+        }
+        self.loops = loops;
+        Ok(report)
+    }
+
+    /// Inserts a parameter point (3D position given for border points, else evaluated).
+    fn insert(
+        &mut self,
+        cdt: &mut ConstrainedDelaunayTriangulation<Point2<f64>>,
+        scale: DVec2,
+        uv: DVec2,
+        p: Option<DVec3>,
+        s: &impl SurfaceEval,
+    ) -> Result<FixedVertexHandle, TrimError> {
+        let q = uv * scale;
+        if !q.is_finite() {
+            return Err(TrimError::NotFinite);
+        }
+        let h = cdt
+            .insert(Point2::new(q.x, q.y))
+            .map_err(|_| TrimError::NotFinite)?;
+        if h.index() == self.uvs.len() {
+            self.uvs.push(uv);
+            self.pos.push(p.unwrap_or_else(|| s.point(uv)));
+        }
+        Ok(h)
+    }
+
+    /// Triangles of the CDT inside the domain, as vertex indices.
+    fn inside_faces(
+        &self,
+        cdt: &ConstrainedDelaunayTriangulation<Point2<f64>>,
+        segs: &[(DVec2, DVec2)],
+        use_parity: bool,
+    ) -> Vec<[u32; 3]> {
+        let tri_of = |f: spade::handles::FaceHandle<'_, spade::handles::InnerTag, _, _, _, _>| {
+            let v = f.vertices();
+            [
+                v[0].fix().index() as u32,
+                v[1].fix().index() as u32,
+                v[2].fix().index() as u32,
+            ]
+        };
+        if !use_parity {
+            return cdt
+                .inner_faces()
+                .filter(|f| {
+                    let t = tri_of(*f);
+                    let c = (self.uvs[t[0] as usize]
+                        + self.uvs[t[1] as usize]
+                        + self.uvs[t[2] as usize])
+                        / 3.0;
+                    inside(segs, c)
+                })
+                .map(tri_of)
+                .collect();
+        }
+        // Flood fill from the hull: parity flips across every constraint edge.
+        let n = cdt.num_all_faces();
+        let mut state: Vec<u8> = vec![2; n]; // 0 outside, 1 inside, 2 unknown
+        let mut queue = VecDeque::new();
+        for e in cdt.convex_hull() {
+            // `e` has the outer face on its left; its twin's face is inner.
+            let inner = e.rev().face();
+            if let Some(f) = inner.as_inner() {
+                let idx = f.fix().index();
+                if state[idx] == 2 {
+                    state[idx] = u8::from(e.is_constraint_edge());
+                    queue.push_back(f.fix());
+                }
+            }
+        }
+        while let Some(fh) = queue.pop_front() {
+            let f = cdt.face(fh);
+            let s0 = state[fh.index()];
+            for e in f.adjacent_edges() {
+                let other = e.rev().face();
+                if let Some(o) = other.as_inner() {
+                    let idx = o.fix().index();
+                    if state[idx] == 2 {
+                        state[idx] = if e.is_constraint_edge() { 1 - s0 } else { s0 };
+                        queue.push_back(o.fix());
+                    }
+                }
+            }
+        }
+        cdt.inner_faces()
+            .filter(|f| state[f.fix().index()] == 1)
+            .map(tri_of)
+            .collect()
+    }
+
+    /// Largest distance surface ↔ triangle at 7 samples.
+    fn triangle_error(&self, s: &impl SurfaceEval, t: [u32; 3]) -> f64 {
+        let (u0, u1, u2) = (
+            self.uvs[t[0] as usize],
+            self.uvs[t[1] as usize],
+            self.uvs[t[2] as usize],
+        );
+        let (p0, p1, p2) = (
+            self.pos[t[0] as usize],
+            self.pos[t[1] as usize],
+            self.pos[t[2] as usize],
+        );
+        const B: [[f64; 3]; 7] = [
+            [1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0],
+            [0.5, 0.5, 0.0],
+            [0.0, 0.5, 0.5],
+            [0.5, 0.0, 0.5],
+            [2.0 / 3.0, 1.0 / 6.0, 1.0 / 6.0],
+            [1.0 / 6.0, 2.0 / 3.0, 1.0 / 6.0],
+            [1.0 / 6.0, 1.0 / 6.0, 2.0 / 3.0],
+        ];
+        B.iter()
+            .map(|b| {
+                let uv = u0 * b[0] + u1 * b[1] + u2 * b[2];
+                let lin = p0 * b[0] + p1 * b[1] + p2 * b[2];
+                s.point(uv).distance(lin)
+            })
+            .fold(0.0, f64::max)
+    }
+
+    /// The border of one loop: polylines of its edges, projected to parameter space.
+    fn loop_points(
+        &self,
+        face: &TrimmedFace,
+        li: usize,
+        lp: &[LoopEdge],
+        eps: f64,
+        report: &mut TrimReport,
+    ) -> Result<Vec<BPoint>, TrimError> {
+        let s = face;
+        let (pu, pv) = s.periods();
+        let mut pts: Vec<BPoint> = Vec::new();
+        for (k, le) in lp.iter().enumerate() {
+            let e = &le.edge;
+            let (ts, dev) = polyline_params(e, eps * 0.5);
+            report.trim_error = report.trim_error.max(dev);
+            let n = ts.len();
+            let ordered: Vec<f64> = if le.forward {
+                ts
+            } else {
+                ts.into_iter().rev().collect()
+            };
+            let (first, last) = if le.forward {
+                (e.start, e.end)
+            } else {
+                (e.end, e.start)
+            };
+            for (i, &t) in ordered.iter().enumerate() {
+                let p = if i == 0 {
+                    first
+                } else if i == n - 1 {
+                    last
+                } else {
+                    e.point(t)
+                };
+                // Skip a point equal to the previous one (the shared vertex of two edges).
+                if let Some(prev) = pts.last()
+                    && prev.p.distance(p) <= 1e-12 * (1.0 + p.length())
+                {
+                    continue;
+                }
+                let hint = pts.last().map(|b| b.uv);
+                let mut uv = s.project(p, hint);
+                let off = |uv: DVec2| s.point(uv).distance(p);
+                if uv.is_none_or(|uv| off(uv) > eps.max(1e-3 * face.bounds.radius)) {
+                    // Retry without a hint (a pole or a seam can mislead the local search).
+                    if let Some(g) = s.project(p, None)
+                        && uv.is_none_or(|uv| off(g) < off(uv))
+                    {
+                        uv = Some(g);
+                    }
+                }
+                let Some(mut uv) = uv else {
+                    return Err(TrimError::Projection { edge: e.id });
+                };
+                if let Some(prev) = pts.last() {
+                    uv = unwrap_near(uv, prev.uv, pu, pv);
+                }
+                pts.push(BPoint {
+                    p,
+                    uv,
+                    src: Some((li as u32, k as u32, t)),
+                });
+            }
+        }
+        // The loop closes on its first point: drop a repeated last point.
+        if pts.len() > 1
+            && let (Some(f), Some(l)) = (pts.first(), pts.last())
+            && f.p.distance(l.p) <= 1e-12 * (1.0 + f.p.length())
+        {
+            let l = pts[pts.len() - 1];
+            let unwrapped = unwrap_near(l.uv, f.uv, pu, pv);
+            if unwrapped.distance(f.uv) < 1e-9 * (1.0 + f.uv.length()) {
+                pts.pop();
+            }
+        }
+        Ok(pts)
+    }
+}
+
+/// Curve parameters of an edge's polyline (from `t0` to `t1`), with chord deviation ≤ `tol`
+/// at 3 samples per segment; returns also the largest deviation sampled.
+fn polyline_params(e: &crate::model::trimmed::TrimEdge, tol: f64) -> (Vec<f64>, f64) {
+    let n0 = if e.is_closed() { 8 } else { 2 };
+    let mut out = vec![e.t0];
+    let mut worst = 0.0f64;
+    // Stack of segments to examine, in reverse order so they pop in order.
+    let mut stack: Vec<(f64, f64, usize)> = (0..n0)
+        .rev()
+        .map(|i| {
+            let a = e.t0 + (e.t1 - e.t0) * i as f64 / n0 as f64;
+            let b = e.t0 + (e.t1 - e.t0) * (i + 1) as f64 / n0 as f64;
+            (a, b, 0)
+        })
+        .collect();
+    let total_budget = MAX_EDGE_SEGMENTS;
+    while let Some((a, b, depth)) = stack.pop() {
+        let pa = e.point(a);
+        let pb = e.point(b);
+        let dev = [0.25, 0.5, 0.75]
+            .iter()
+            .map(|f| {
+                let t = a + (b - a) * f;
+                dist_to_segment(e.point(t), pa, pb)
+            })
+            .fold(0.0, f64::max);
+        if dev > tol && depth < 24 && out.len() + stack.len() < total_budget {
+            let m = 0.5 * (a + b);
+            stack.push((m, b, depth + 1));
+            stack.push((a, m, depth + 1));
+        } else {
+            worst = worst.max(dev);
+            out.push(b);
+        }
+    }
+    (out, worst)
+}
+
+fn dist_to_segment(p: DVec3, a: DVec3, b: DVec3) -> f64 {
+    let ab = b - a;
+    let l2 = ab.length_squared();
+    if l2 == 0.0 {
+        return p.distance(a);
+    }
+    let t = ((p - a).dot(ab) / l2).clamp(0.0, 1.0);
+    p.distance(a + ab * t)
+}
+
+/// `uv` shifted by whole periods to be nearest to `prev`.
+fn unwrap_near(mut uv: DVec2, prev: DVec2, pu: Option<f64>, pv: Option<f64>) -> DVec2 {
+    if let Some(p) = pu.filter(|p| *p > 0.0) {
+        uv.x -= ((uv.x - prev.x) / p).round() * p;
+    }
+    if let Some(p) = pv.filter(|p| *p > 0.0) {
+        uv.y -= ((uv.y - prev.y) / p).round() * p;
+    }
+    uv
+}
+
+/// How many periods a closed loop winds around, per direction.
+fn winding(lp: &[BPoint], pu: Option<f64>, pv: Option<f64>) -> (i64, i64) {
+    let (Some(f), Some(l)) = (lp.first(), lp.last()) else {
+        return (0, 0);
+    };
+    let d = l.uv - f.uv;
+    let w = |d: f64, p: Option<f64>| match p {
+        Some(p) if p > 0.0 => (d / p).round() as i64,
+        _ => 0,
+    };
+    (w(d.x, pu), w(d.y, pv))
+}
+
+/// Joins or closes loops that run around a periodic surface, so that every loop is a closed
+/// polygon in parameter space.
+fn close_wrapping_loops(
+    face: &TrimmedFace,
+    loops: &mut Vec<Vec<BPoint>>,
+    eps: f64,
+) -> Result<(), TrimError> {
+    let s = face;
+    let (pu, pv) = s.periods();
+    let wrapping: Vec<usize> = (0..loops.len())
+        .filter(|&i| winding(&loops[i], pu, pv) != (0, 0))
+        .collect();
+    match wrapping.len() {
+        0 => Ok(()),
+        1 => {
+            let i = wrapping[0];
+            let (wu, wv) = winding(&loops[i], pu, pv);
+            let (ru, rv) = parameter_bounds(&face.surface);
+            let lp = &mut loops[i];
+            let (Some(first), Some(last)) = (lp.first().copied(), lp.last().copied()) else {
+                return Ok(());
+            };
+            // The loop runs from `first` to `first + w·P`; close it on the side of the domain.
+            let end =
+                first.uv + DVec2::new(wu as f64 * pu.unwrap_or(0.0), wv as f64 * pv.unwrap_or(0.0));
+            let (a, b) = if wu != 0 {
+                let Some((vmin, vmax)) = rv.or_else(|| singular_range(s, first.uv, false)) else {
+                    return Err(TrimError::UnboundedWrap);
+                };
+                // Running +u, the left side is +v.
+                let up = (wu > 0) == face.domain_left;
+                let v = if up { vmax } else { vmin };
+                (DVec2::new(end.x, v), DVec2::new(first.uv.x, v))
+            } else {
+                let Some((umin, umax)) = ru.or_else(|| singular_range(s, first.uv, true)) else {
+                    return Err(TrimError::UnboundedWrap);
+                };
+                // Running +v, the left side is −u.
+                let left = (wv > 0) == face.domain_left;
+                let u = if left { umin } else { umax };
+                (DVec2::new(u, end.y), DVec2::new(u, first.uv.y))
+            };
+            let _ = last;
+            let mut add = |uv: DVec2| {
+                lp.push(BPoint {
+                    p: s.point(uv),
+                    uv,
+                    src: None,
+                })
+            };
+            add(end);
+            add(a);
+            add(b);
+            let _ = eps;
+            Ok(())
+        }
+        2 => {
+            let (i, j) = (wrapping[0], wrapping[1]);
+            let wi = winding(&loops[i], pu, pv);
+            let period = DVec2::new(pu.unwrap_or(0.0), pv.unwrap_or(0.0));
+            let shift_i = DVec2::new(wi.0 as f64, wi.1 as f64) * period;
+            let b = loops.remove(j.max(i));
+            let a = loops.remove(j.min(i));
+            let (a, b) = if j > i { (a, b) } else { (b, a) };
+            let (Some(a0), Some(b0)) = (a.first().copied(), b.first().copied()) else {
+                return Ok(());
+            };
+            // Shift B so that its start is nearest to A's end (A's start + one turn).
+            let a_end = a0.uv + shift_i;
+            let dir = shift_i.normalize_or_zero();
+            let along = (a_end - b0.uv).dot(dir) / period.dot(dir.abs()).max(1e-300);
+            let k = along.round();
+            let shift_b = dir * period.dot(dir.abs()) * k;
+            let mut joined = a.clone();
+            joined.push(BPoint {
+                p: a0.p,
+                uv: a_end,
+                src: None,
+            });
+            for bp in &b {
+                joined.push(BPoint {
+                    uv: bp.uv + shift_b,
+                    ..*bp
+                });
+            }
+            joined.push(BPoint {
+                p: b0.p,
+                uv: b0.uv + shift_b - shift_i,
+                src: None,
+            });
+            loops.push(joined);
+            Ok(())
+        }
+        n => Err(TrimError::WrapCount(n)),
+    }
+}
+
+/// Where a surface with an unbounded parameter direction collapses to a point (a cone's
+/// apex): searched along the other direction from `uv`. Returns the range between the apex and
+/// the far side, or `None`.
+fn singular_range(s: &impl SurfaceEval, uv: DVec2, along_u: bool) -> Option<(f64, f64)> {
+    // Speed in the periodic direction is linear in the other parameter on a cone: extrapolate.
+    let at = |t: f64| {
+        let q = if along_u {
+            DVec2::new(t, uv.y)
+        } else {
+            DVec2::new(uv.x, t)
+        };
+        let (du, dv) = s.derivs(q);
+        if along_u { dv.length() } else { du.length() }
+    };
+    let t0 = if along_u { uv.x } else { uv.y };
+    let (a, b) = (at(t0), at(t0 + 1.0));
+    let slope = b - a;
+    if slope.abs() < 1e-300 {
+        return None;
+    }
+    let apex = t0 - a / slope;
+    apex.is_finite().then_some((apex.min(t0), apex.max(t0)))
+}
+
+/// Splits border segments until the surface at the parameter midpoint is within `tol` of the
+/// 3D chord midpoint (so the triangles along the border hold the tolerance too).
+fn refine_border(face: &TrimmedFace, lp: &mut Vec<BPoint>, tol: f64) {
+    let s = face;
+    let mut k = 0;
+    let mut budget = 8 * lp.len() + 256;
+    while k < lp.len() && budget > 0 {
+        let a = lp[k];
+        let b = lp[(k + 1) % lp.len()];
+        let mid_uv = 0.5 * (a.uv + b.uv);
+        let chord = 0.5 * (a.p + b.p);
+        let on_surface = s.point(mid_uv);
+        if on_surface.distance(chord) <= tol || a.uv.distance(b.uv) < 1e-12 {
+            k += 1;
+            continue;
+        }
+        budget -= 1;
+        // Split on the curve when both ends come from the same edge, else on the surface.
+        let on_curve = match (a.src, b.src) {
+            (Some((la, ea, ta)), Some((lb, eb, tb))) if (la, ea) == (lb, eb) && ta != tb => face
+                .loops
+                .get(la as usize)
+                .and_then(|l| l.get(ea as usize))
+                .map(|le| (le, la, ea, 0.5 * (ta + tb))),
+            _ => None,
+        };
+        let m = match on_curve {
+            Some((le, la, ea, t)) => {
+                let p = le.edge.point(t);
+                let (pu, pv) = s.periods();
+                let uv = s
+                    .project(p, Some(mid_uv))
+                    .map(|uv| unwrap_near(uv, mid_uv, pu, pv))
+                    .filter(|uv| uv.distance(mid_uv) < a.uv.distance(b.uv))
+                    .unwrap_or(mid_uv);
+                BPoint {
+                    p,
+                    uv,
+                    src: Some((la, ea, t)),
+                }
+            }
+            None => BPoint {
+                p: on_surface,
+                uv: mid_uv,
+                src: None,
+            },
+        };
+        lp.insert(k + 1, m);
+    }
+}
+
+/// At poles (a parameter derivative vanishes) the free coordinate of a border point is
+/// arbitrary: take the neighbour's, so the border runs straight into the pole.
+fn fix_poles(s: &impl SurfaceEval, lp: &mut [BPoint]) {
+    let n = lp.len();
+    if n < 3 {
+        return;
+    }
+    let scale = lp
+        .iter()
+        .map(|b| {
+            let (du, dv) = s.derivs(b.uv);
+            du.length().max(dv.length())
+        })
+        .fold(0.0, f64::max);
+    let tiny = scale * 1e-7;
+    for k in 0..n {
+        let (du, dv) = s.derivs(lp[k].uv);
+        let prev = lp[(k + n - 1) % n].uv;
+        let next = lp[(k + 1) % n].uv;
+        if du.length() <= tiny {
+            // u is free: follow the neighbour on the longer side in v... keep continuity.
+            lp[k].uv.x = if (prev.y - lp[k].uv.y).abs() > (next.y - lp[k].uv.y).abs() {
+                prev.x
+            } else {
+                next.x
+            };
+        } else if dv.length() <= tiny {
+            lp[k].uv.y = if (prev.x - lp[k].uv.x).abs() > (next.x - lp[k].uv.x).abs() {
+                prev.y
+            } else {
+                next.y
+            };
+        }
+    }
+}
+
+fn uv_box(loops: &[Vec<BPoint>]) -> (DVec2, DVec2) {
+    let mut lo = DVec2::splat(f64::INFINITY);
+    let mut hi = DVec2::splat(f64::NEG_INFINITY);
+    for b in loops.iter().flatten() {
+        lo = lo.min(b.uv);
+        hi = hi.max(b.uv);
+    }
+    (lo, hi)
+}
+
+fn segments(loops: &[Vec<BPoint>]) -> Vec<(DVec2, DVec2)> {
+    let mut segs = Vec::new();
+    for lp in loops {
+        for k in 0..lp.len() {
+            segs.push((lp[k].uv, lp[(k + 1) % lp.len()].uv));
+        }
+    }
+    segs
+}
+
+/// Even-odd point-in-polygon over all loop segments.
+fn inside(segs: &[(DVec2, DVec2)], p: DVec2) -> bool {
+    let mut c = false;
+    for &(a, b) in segs {
+        if (a.y > p.y) != (b.y > p.y) {
+            let x = a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x);
+            if p.x < x {
+                c = !c;
+            }
+        }
+    }
+    c
+}
+
+/// Grid cells (nu × nv over the box from `lo`) that a border segment passes through.
+fn border_cells(
+    segs: &[(DVec2, DVec2)],
+    lo: DVec2,
+    du: f64,
+    dv: f64,
+    nu: usize,
+    nv: usize,
+) -> Vec<bool> {
+    let mut near = vec![false; nu * nv];
+    let cell = |p: DVec2| {
+        let i = (((p.x - lo.x) / du).floor() as i64).clamp(0, nu as i64 - 1) as usize;
+        let j = (((p.y - lo.y) / dv).floor() as i64).clamp(0, nv as i64 - 1) as usize;
+        i * nv + j
+    };
+    for &(a, b) in segs {
+        let steps = (((b.x - a.x) / du).abs() + ((b.y - a.y) / dv).abs()).ceil() as usize * 2 + 1;
+        let steps = steps.min(4 * (nu + nv));
+        for k in 0..=steps {
+            let p = a + (b - a) * (k as f64 / steps as f64);
+            near[cell(p)] = true;
+        }
+    }
+    near
+}
+
+/// Parameter scaling (mean speeds) and grid steps for tolerance `eps` over the box.
+fn grid_steps(s: &impl SurfaceEval, lo: DVec2, hi: DVec2, eps: f64) -> (DVec2, (usize, usize)) {
+    const N: usize = 9;
+    let (mut muu, mut muv, mut mvv) = (0.0f64, 0.0f64, 0.0f64);
+    let (mut su, mut sv, mut cnt) = (0.0, 0.0, 0.0);
+    for i in 0..N {
+        for j in 0..N {
+            let uv = lo + (hi - lo) * DVec2::new(i as f64, j as f64) / (N - 1) as f64;
+            let (a, b, c) = s.second_derivs(uv);
+            if a.is_finite() && b.is_finite() && c.is_finite() {
+                muu = muu.max(a.length());
+                muv = muv.max(b.length());
+                mvv = mvv.max(c.length());
+            }
+            let (du, dv) = s.derivs(uv);
+            if du.is_finite() && dv.is_finite() {
+                su += du.length();
+                sv += dv.length();
+                cnt += 1.0;
+            }
+        }
+    }
+    // Sampled maxima may miss a peak between samples: a safety factor; the measured error and
+    // refinement catch the rest.
+    let (muu, muv, mvv) = (muu * 1.25, muv * 1.25, mvv * 1.25);
+    let size = hi - lo;
+    let scale = if cnt > 0.0 {
+        let (su, sv) = (su / cnt, sv / cnt);
+        let f = |x: f64| if x > 1e-300 && x.is_finite() { x } else { 1.0 };
+        DVec2::new(f(su), f(sv))
+    } else {
+        DVec2::ONE
+    };
+    // Choose hu = a/√Muu, hv = a/√Mvv with a² (2 + 2 Muv/√(Muu Mvv)) ≤ 8ε.
+    let steps_for = |m: f64, len: f64, other: f64| -> usize {
+        if m <= 1e-300 || len <= 0.0 {
+            return 1;
+        }
+        let cross = if other > 1e-300 {
+            muv / (m * other).sqrt()
+        } else {
+            0.0
+        };
+        let a2 = 8.0 * eps / (2.0 + 2.0 * cross);
+        let h = (a2 / m).sqrt();
+        ((len / h).ceil() as usize).clamp(1, MAX_GRID)
+    };
+    let nu = steps_for(muu + muv * 0.0, size.x, mvv);
+    let nv = steps_for(mvv, size.y, muu);
+    (scale, (nu, nv))
+}
+
+/// Unit normal (cross product of the parameter derivatives), nudged into the domain at poles.
+fn normal_at(s: &impl SurfaceEval, uv: DVec2, lo: DVec2, hi: DVec2, face: &TrimmedFace) -> Vec3 {
+    let _ = face;
+    let n = |uv: DVec2| {
+        let (du, dv) = s.derivs(uv);
+        du.cross(dv)
+    };
+    let mut v = n(uv);
+    if v.length_squared() < 1e-24 || !v.is_finite() {
+        let centre = 0.5 * (lo + hi);
+        for f in [1e-6, 1e-4, 1e-2] {
+            v = n(uv + (centre - uv) * f);
+            if v.length_squared() >= 1e-24 && v.is_finite() {
+                break;
+            }
+        }
+    }
+    let v = v.normalize_or_zero().as_vec3();
+    if v == Vec3::ZERO { Vec3::Z } else { v }
+}
