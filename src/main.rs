@@ -34,6 +34,23 @@ enum Command {
     Stats(StatsArgs),
     /// Render random views with fat borders off and on and count crack and growth pixels.
     Check(CheckArgs),
+    /// Write the tessellation as binary glTF (.glb): one mesh per part, one node per placement.
+    Export(ExportArgs),
+}
+
+#[derive(Args, Debug)]
+struct ExportArgs {
+    /// Model file (.bpt, .step, .stp).
+    file: PathBuf,
+    /// Output .glb file.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Tessellate for the default view at this screen-space error (pixels, 1024x768).
+    #[arg(long, default_value_t = view::DEFAULT_PIXEL_ERROR, conflicts_with = "tolerance")]
+    pixel_error: f64,
+    /// Tessellate to this absolute tolerance instead (model units: millimetres for STEP).
+    #[arg(long)]
+    tolerance: Option<f64>,
 }
 
 #[derive(Args, Debug, Clone)]
@@ -316,6 +333,124 @@ fn cmd_render(args: &RenderArgs) -> Result<(), CliError> {
     Ok(())
 }
 
+fn cmd_export(args: &ExportArgs) -> Result<(), CliError> {
+    use patchwork::io::gltf_out::{ExportMesh, ExportNode, ExportScene, write_glb};
+    use patchwork::tessellate::{PatchMesh, Tessellators};
+    let scene = load(&args.file)?;
+    if let Some(t) = args.tolerance
+        && !(t.is_finite() && t > 0.0)
+    {
+        return Err(format!("--tolerance must be a positive number, not {t}").into());
+    }
+    let view = View::framing(
+        &scene.bounds,
+        scene.up.vector(),
+        view::DEFAULT_FOV_Y_DEG.to_radians(),
+        (1024, 768),
+    );
+    // Placements: patches of one part sharing a transform form one instance.
+    let mut instances: Vec<(u32, glam::DMat4)> = Vec::new();
+    for p in &scene.patches {
+        if !instances
+            .iter()
+            .any(|(part, m)| *part == p.part && *m == p.transform)
+        {
+            instances.push((p.part, p.transform));
+        }
+    }
+    let mut meshes = Vec::new();
+    let mut part_mesh = std::collections::HashMap::new();
+    let mut t = Tessellators::new();
+    for (part, first) in &instances {
+        if part_mesh.contains_key(part) {
+            continue;
+        }
+        // The finest ε any placement of a face asks for, in the part's own units.
+        let mut mesh = ExportMesh {
+            name: scene
+                .parts
+                .get(*part as usize)
+                .map(|p| p.name.clone())
+                .unwrap_or_default(),
+            ..ExportMesh::default()
+        };
+        for p in scene
+            .patches
+            .iter()
+            .filter(|p| p.part == *part && p.transform == *first)
+        {
+            let eps = match args.tolerance {
+                Some(tol) => tol / p.scale(),
+                None => scene
+                    .patches
+                    .iter()
+                    .filter(|q| q.part == *part && same_surface(q, p))
+                    .map(|q| view.eps_obj(&q.bounds, args.pixel_error) / q.scale())
+                    .fold(f64::INFINITY, f64::min),
+            };
+            let local = patchwork::model::Patch {
+                transform: glam::DMat4::IDENTITY,
+                ..p.clone()
+            };
+            let mut m = PatchMesh::default();
+            t.patch(&local, eps, &mut m);
+            let base = mesh.positions.len() as u32;
+            mesh.positions
+                .extend(m.positions.iter().map(|v| v.to_array()));
+            mesh.normals.extend(m.normals.iter().map(|v| v.to_array()));
+            mesh.indices
+                .extend(m.triangles.iter().flatten().map(|i| base + i));
+            if mesh.color.is_none() {
+                mesh.color = p.color.map(|c| [c[0], c[1], c[2], 1.0]);
+            }
+        }
+        part_mesh.insert(*part, meshes.len());
+        meshes.push(mesh);
+    }
+    let nodes = instances
+        .iter()
+        .enumerate()
+        .map(|(i, (part, m))| ExportNode {
+            name: format!(
+                "{} {}",
+                scene
+                    .parts
+                    .get(*part as usize)
+                    .map(|p| p.name.as_str())
+                    .unwrap_or(""),
+                i
+            ),
+            mesh: part_mesh[part],
+            matrix: m.as_mat4().to_cols_array(),
+        })
+        .collect();
+    let doc = ExportScene {
+        meshes,
+        nodes,
+        generator: format!("patchwork {}", env!("CARGO_PKG_VERSION")),
+    };
+    check_pixel_error(args.pixel_error)?;
+    let stats = write_glb(&args.output, &doc)?;
+    eprintln!(
+        "{}: {} meshes, {} nodes, {} triangles, {} bytes",
+        args.output.display(),
+        stats.meshes,
+        stats.nodes,
+        stats.triangles,
+        stats.bytes
+    );
+    Ok(())
+}
+
+/// Whether two patches draw the same surface (the same face placed twice).
+fn same_surface(a: &patchwork::model::Patch, b: &patchwork::model::Patch) -> bool {
+    use patchwork::model::PatchSurface;
+    match (&a.surface, &b.surface) {
+        (PatchSurface::Trimmed(x), PatchSurface::Trimmed(y)) => std::sync::Arc::ptr_eq(x, y),
+        _ => a.id == b.id,
+    }
+}
+
 fn cmd_stats(args: &StatsArgs) -> Result<(), CliError> {
     let scene = load(&args.file)?;
     let view = make_view(&scene, &args.camera)?;
@@ -448,6 +583,7 @@ fn main() -> ExitCode {
         Command::Render(a) => cmd_render(a).map(|()| true),
         Command::Stats(a) => cmd_stats(a).map(|()| true),
         Command::Check(a) => cmd_check(a),
+        Command::Export(a) => cmd_export(a).map(|()| true),
     };
     match result {
         Ok(true) => ExitCode::SUCCESS,

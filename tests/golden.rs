@@ -10,7 +10,10 @@ use patchwork::tessellate::tessellate_scene;
 use patchwork::view::{self, View};
 
 fn golden(name: &str, dir: Option<DVec3>) {
-    let scene = common::teapot();
+    golden_of(common::teapot(), name, dir)
+}
+
+fn golden_of(scene: patchwork::model::Scene, name: &str, dir: Option<DVec3>) {
     let up = scene.up.vector();
     let fov = view::DEFAULT_FOV_Y_DEG.to_radians();
     let size = (400, 300);
@@ -48,4 +51,18 @@ fn teapot_from_above() {
 #[test]
 fn teapot_from_the_side() {
     golden("teapot-side", Some(DVec3::new(0.0, -1.0, 0.15)));
+}
+
+/// STEP models: an assembly (18 placed parts), a sheet-metal part with B-spline bends (in
+/// inches, scaled to mm), an analytic part and a revolved NURBS part.
+#[test]
+fn step_models() {
+    for (file, name) in [
+        ("as1-oc-214.stp", "step-as1"),
+        ("NIST_MBE_PMI_3.stp", "step-nist-pmi3"),
+        ("nist_ctc_01_asme1_rd.stp", "step-nist-ctc01"),
+        ("NIST_MBE_PMI_11.stp", "step-nist-pmi11"),
+    ] {
+        golden_of(common::load(file), name, None);
+    }
 }

