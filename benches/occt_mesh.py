@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Open CASCADE BRepMesh baseline for `benches/step_compare.rs`.
 
-Usage: occt_mesh.py FILE TOL_ABS [TOL_ABS ...] [--units file|mm] [--rel]
+Usage: occt_mesh.py FILE TOL_ABS [TOL_ABS ...] [--units file|mm|auto] [--match-diag D] [--rel]
 
 Reads FILE with STEPControl_Reader (TransferRoots, OneShape), then for every absolute tolerance
 meshes the whole shape with `BRepMesh_IncrementalMesh(shape, tol, False, 0.5, False)` (linear
@@ -11,13 +11,21 @@ object per line on stdout:
     {"tool": "occt", "file": ..., "tol": ..., "read_ms": ..., "mesh_ms": ..., "triangles": ...,
      "faces": ..., "faces_meshed": ..., "max_error": ..., "error_ratio": ..., "unprojected": ...,
      "samples": ..., "sampled": ..., "sample_ms": ..., "bbox_diag": ..., "bbox_diag_mm": ...,
-     "units": ..., "file_unit": ..., "mm_per_unit": ...}
+     "bbox_diag_shape": ..., "units": ..., "unit_scale": ..., "file_unit": ..., "mm_per_unit": ...}
 
-Units. OCCT converts lengths to millimetres by default, while patchwork's reader keeps the
-file's own unit. With `--units file` (the default) the reader is told the file's length unit
-(`SetSystemLengthUnit`), so TOL_ABS, `bbox_diag` and `max_error` are in file units, the same
-units as the Rust bench passes. `--units mm` keeps OCCT's default (millimetres). `bbox_diag_mm`
-is always the diagonal in millimetres, so either can be checked against the other reader.
+Units. OCCT reads lengths in millimetres; another reader may keep the file's own unit. TOL_ABS
+and every length printed (`tol`, `max_error`, `bbox_diag`) are in the *output unit*:
+`--units file` (the default) the file's declared length unit, `--units mm` millimetres, and
+`--units auto --match-diag D` whichever of the two gives a bounding-box diagonal closer to D
+(the other reader's diagonal; the unit factors, 10 to 1000, dwarf any difference in boxes).
+The shape stays in millimetres: tolerances are multiplied by `unit_scale` (mm per output unit)
+before meshing and lengths divided by it, which is exact since BRepMesh's angular deflection does
+not depend on scale. `bbox_diag_mm` is the diagonal in millimetres.
+
+`bbox_diag` is the tight box of the faces (`BRepBndLib.AddOptimal_s` per face, no triangulation,
+no tolerance enlargement), comparable with a box computed from the faces' geometry.
+`bbox_diag_shape` is `BRepBndLib.Add_s` on the whole shape (looser: control points, tolerances,
+and any non-face geometry the file carries).
 
 Measured error. For every triangle of every face the centroid and the three edge midpoints are
 projected onto the face's surface (`BRep_Tool.Surface_s(face)`, which carries the face's
@@ -88,7 +96,7 @@ MM_PER_UNIT = {
     "foot": 304.8,
     "ft": 304.8,
 }
-"""Millimetres per file length unit, by the (lower-cased) names STEPControl_Reader.FileUnits gives."""
+"""Millimetres per file length unit, by the lower-cased names STEPControl_Reader.FileUnits gives."""
 
 
 def emit(obj):
@@ -96,9 +104,10 @@ def emit(obj):
 
 
 def file_length_unit(reader):
-    """(name, mm per unit) of the first length unit declared in the file, (None, None) if unknown."""
+    """(name, mm per unit) of the file's first declared length unit; (None, None) if unknown."""
     lengths = Sequence_TCollection_AsciiString()
-    reader.FileUnits(lengths, Sequence_TCollection_AsciiString(), Sequence_TCollection_AsciiString())
+    angles, solid_angles = Sequence_TCollection_AsciiString(), Sequence_TCollection_AsciiString()
+    reader.FileUnits(lengths, angles, solid_angles)
     names = [lengths.Value(i).ToCString() for i in range(1, lengths.Length() + 1)]
     if not names:
         return None, None
@@ -112,8 +121,19 @@ def file_length_unit(reader):
 
 
 def bbox_diagonal(shape):
+    """Diagonal of OCCT's default (loose) box of the whole shape."""
     box = Bnd_Box()
     BRepBndLib.Add_s(shape, box, False)
+    if box.IsVoid():
+        return 0.0
+    return math.sqrt(box.SquareExtent())
+
+
+def faces_bbox_diagonal(faces):
+    """Diagonal of the tight box of the faces' geometry."""
+    box = Bnd_Box()
+    for face in faces:
+        BRepBndLib.AddOptimal_s(face, box, False, False)
     if box.IsVoid():
         return 0.0
     return math.sqrt(box.SquareExtent())
@@ -165,7 +185,8 @@ class SurfaceDistance:
             self.data = (o.X(), o.Y(), o.Z(), sph.Radius())
         else:
             self.adaptor = adaptor
-            self.local = Extrema_GenLocateExtPS(adaptor, PROJECTION_TOLERANCE, PROJECTION_TOLERANCE)
+            tol = PROJECTION_TOLERANCE
+            self.local = Extrema_GenLocateExtPS(adaptor, tol, tol)
 
     def global_distance(self, point):
         if self.projector is None:
@@ -252,7 +273,7 @@ def mid(*points):
 
 
 def measure(faces, meshed):
-    """Max distance over the sampled points, with counts; `meshed` is [(face, nodes, uvs, tris)]."""
+    """Max distance over the samples, with counts; `meshed` is [(face, nodes, uvs, tris)]."""
     total = sum(len(t) for _, _, _, t in meshed)
     stride = max(1, math.ceil(4 * total / MAX_SAMPLES))
     max_error, max_face, samples, unprojected, used, global_calls = 0.0, None, 0, 0, 0, 0
@@ -286,7 +307,7 @@ def measure(faces, meshed):
     return max_error, max_face, samples, unprojected, sampled, global_calls
 
 
-def run(path, tolerances, units, relative):
+def run(path, tolerances, units, match_diag, relative):
     base = {"tool": "occt", "file": path}
     t0 = time.perf_counter()
     reader = STEPControl_Reader()
@@ -295,24 +316,34 @@ def run(path, tolerances, units, relative):
         emit({**base, "error": f"STEPControl_Reader.ReadFile returned {status}"})
         return 1
     unit_name, mm_per_unit = file_length_unit(reader)
-    scale = 1.0
-    if units == "file" and mm_per_unit is not None:
-        reader.SetSystemLengthUnit(mm_per_unit)
-        scale = mm_per_unit
     reader.TransferRoots()
     shape = reader.OneShape()
     read_ms = (time.perf_counter() - t0) * 1e3
     if shape is None or shape.IsNull():
         emit({**base, "read_ms": read_ms, "error": "no shape transferred"})
         return 1
-    diag = bbox_diagonal(shape)
     faces = faces_of(shape)
+    diag_mm = faces_bbox_diagonal(faces)
+    # Output unit: millimetres (scale 1) or the file's unit (scale = mm per file unit).
+    file_scale = mm_per_unit if mm_per_unit is not None else 1.0
+    if units == "mm":
+        scale = 1.0
+    elif units == "file":
+        scale = file_scale
+    else:
+        def misfit(k):
+            return abs(math.log(max(diag_mm / k, 1e-300) / match_diag))
+
+        scale = min((1.0, file_scale), key=misfit)
+    diag = diag_mm / scale
     common = {
         **base,
         "read_ms": read_ms,
         "bbox_diag": diag,
-        "bbox_diag_mm": diag * scale,
-        "units": "file" if units == "file" and mm_per_unit is not None else "mm",
+        "bbox_diag_mm": diag_mm,
+        "bbox_diag_shape": bbox_diagonal(shape) / scale,
+        "units": "mm" if scale == 1.0 else "file",
+        "unit_scale": scale,
         "file_unit": unit_name,
         "mm_per_unit": mm_per_unit,
         "faces": len(faces),
@@ -325,7 +356,9 @@ def run(path, tolerances, units, relative):
         try:
             BRepTools.Clean_s(shape)
             t = time.perf_counter()
-            mesher = BRepMesh_IncrementalMesh(shape, tol, False, ANGULAR_DEFLECTION, False)
+            mesher = BRepMesh_IncrementalMesh(
+                shape, tol * scale, False, ANGULAR_DEFLECTION, False
+            )
             mesh_ms = (time.perf_counter() - t) * 1e3
             row["mesh_ms"] = mesh_ms
             row["mesh_done"] = bool(mesher.IsDone())
@@ -337,7 +370,9 @@ def run(path, tolerances, units, relative):
             row["triangles"] = sum(len(t) for _, _, _, t in meshed)
             row["faces_meshed"] = len(meshed)
             t = time.perf_counter()
-            max_error, max_face, samples, unprojected, sampled, global_calls = measure(faces, meshed)
+            measured = measure(faces, meshed)
+            max_error, max_face, samples, unprojected, sampled, global_calls = measured
+            max_error /= scale
             row.update(
                 max_error=max_error,
                 error_ratio=max_error / tol if tol > 0 else None,
@@ -360,9 +395,16 @@ def main():
     parser.add_argument("tolerances", nargs="+", type=float, metavar="TOL_ABS")
     parser.add_argument(
         "--units",
-        choices=("file", "mm"),
+        choices=("file", "mm", "auto"),
         default="file",
-        help="length unit of TOL_ABS and of the output: the file's own (default) or OCCT's mm",
+        help="length unit of TOL_ABS and of the output: the file's own (default), mm, or the "
+        "one whose diagonal is closer to --match-diag",
+    )
+    parser.add_argument(
+        "--match-diag",
+        type=float,
+        metavar="D",
+        help="the other reader's bounding-box diagonal, for --units auto",
     )
     parser.add_argument(
         "--rel",
@@ -373,7 +415,9 @@ def main():
     bad = [t for t in args.tolerances if not (t > 0 and math.isfinite(t))]
     if bad:
         parser.error(f"tolerances must be positive and finite: {bad}")
-    return run(args.file, args.tolerances, args.units, args.rel)
+    if args.units == "auto" and not (args.match_diag and args.match_diag > 0):
+        parser.error("--units auto needs a positive --match-diag")
+    return run(args.file, args.tolerances, args.units, args.match_diag, args.rel)
 
 
 if __name__ == "__main__":
