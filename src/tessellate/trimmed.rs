@@ -137,7 +137,7 @@ impl TrimmedTessellator {
             }
         }
         let mut loops = std::mem::take(&mut self.loops);
-        close_wrapping_loops(face, &mut loops, eps)?;
+        close_wrapping_loops(face, &mut loops)?;
         for lp in loops.iter_mut() {
             if !shared_borders {
                 refine_border(face, lp, eps * 0.5);
@@ -251,8 +251,7 @@ impl TrimmedTessellator {
             if *r == u32::MAX {
                 *r = out.positions.len() as u32;
                 out.positions.push(self.pos[i as usize].as_vec3());
-                out.normals
-                    .push(normal_at(s, self.uvs[i as usize], lo, hi, face));
+                out.normals.push(normal_at(s, self.uvs[i as usize], lo, hi));
             }
             *r
         };
@@ -498,7 +497,6 @@ fn polyline_params(e: &crate::model::trimmed::TrimEdge, tol: f64) -> (Vec<f64>, 
             (a, b, 0)
         })
         .collect();
-    let total_budget = MAX_EDGE_SEGMENTS;
     while let Some((a, b, depth)) = stack.pop() {
         let pa = e.point(a);
         let pb = e.point(b);
@@ -509,7 +507,7 @@ fn polyline_params(e: &crate::model::trimmed::TrimEdge, tol: f64) -> (Vec<f64>, 
                 dist_to_segment(e.point(t), pa, pb)
             })
             .fold(0.0, f64::max);
-        if dev > tol && depth < 24 && out.len() + stack.len() < total_budget {
+        if dev > tol && depth < 24 && out.len() + stack.len() < MAX_EDGE_SEGMENTS {
             let m = 0.5 * (a + b);
             stack.push((m, b, depth + 1));
             stack.push((a, m, depth + 1));
@@ -557,11 +555,7 @@ fn winding(lp: &[BPoint], pu: Option<f64>, pv: Option<f64>) -> (i64, i64) {
 
 /// Joins or closes loops that run around a periodic surface, so that every loop is a closed
 /// polygon in parameter space.
-fn close_wrapping_loops(
-    face: &TrimmedFace,
-    loops: &mut Vec<Vec<BPoint>>,
-    eps: f64,
-) -> Result<(), TrimError> {
+fn close_wrapping_loops(face: &TrimmedFace, loops: &mut Vec<Vec<BPoint>>) -> Result<(), TrimError> {
     let s = face;
     let (pu, pv) = s.periods();
     let wrapping: Vec<usize> = (0..loops.len())
@@ -574,7 +568,7 @@ fn close_wrapping_loops(
             let (wu, wv) = winding(&loops[i], pu, pv);
             let (ru, rv) = parameter_bounds(&face.surface);
             let lp = &mut loops[i];
-            let (Some(first), Some(last)) = (lp.first().copied(), lp.last().copied()) else {
+            let Some(first) = lp.first().copied() else {
                 return Ok(());
             };
             // The loop runs from `first` to `first + w·P`; close it on the side of the domain.
@@ -597,7 +591,6 @@ fn close_wrapping_loops(
                 let u = if left { umin } else { umax };
                 (DVec2::new(u, end.y), DVec2::new(u, first.uv.y))
             };
-            let _ = last;
             let mut add = |uv: DVec2| {
                 lp.push(BPoint {
                     p: s.point(uv),
@@ -608,7 +601,6 @@ fn close_wrapping_loops(
             add(end);
             add(a);
             add(b);
-            let _ = eps;
             Ok(())
         }
         2 => {
@@ -870,14 +862,13 @@ fn grid_steps(s: &impl SurfaceEval, lo: DVec2, hi: DVec2, eps: f64) -> (DVec2, (
         let h = (a2 / m).sqrt();
         ((len / h).ceil() as usize).clamp(1, MAX_GRID)
     };
-    let nu = steps_for(muu + muv * 0.0, size.x, mvv);
+    let nu = steps_for(muu, size.x, mvv);
     let nv = steps_for(mvv, size.y, muu);
     (scale, (nu, nv))
 }
 
 /// Unit normal (cross product of the parameter derivatives), nudged into the domain at poles.
-fn normal_at(s: &impl SurfaceEval, uv: DVec2, lo: DVec2, hi: DVec2, face: &TrimmedFace) -> Vec3 {
-    let _ = face;
+fn normal_at(s: &impl SurfaceEval, uv: DVec2, lo: DVec2, hi: DVec2) -> Vec3 {
     let n = |uv: DVec2| {
         let (du, dv) = s.derivs(uv);
         du.cross(dv)

@@ -438,7 +438,7 @@ impl<'a> Parser<'a> {
             let word = self.section_word();
             match word {
                 "HEADER" => {
-                    self.expect_semicolon_after_keyword()?;
+                    self.end_of_record()?;
                     self.header(&mut file)?;
                 }
                 "DATA" => {
@@ -447,16 +447,16 @@ impl<'a> Parser<'a> {
                         self.pos += 1;
                         self.list_items()?;
                     }
-                    self.expect_semicolon_after_keyword()?;
+                    self.end_of_record()?;
                     self.data(&mut file)?;
                     seen_data = true;
                 }
                 "ANCHOR" | "REFERENCE" | "SIGNATURE" => {
-                    self.expect_semicolon_after_keyword()?;
+                    self.end_of_record()?;
                     self.skip_section()?;
                 }
                 "END-ISO-10303-21" => {
-                    self.expect_semicolon_after_keyword()?;
+                    self.end_of_record()?;
                     break;
                 }
                 _ => {
@@ -513,23 +513,6 @@ impl<'a> Parser<'a> {
         }
     }
 
-    fn expect_semicolon_after_keyword(&mut self) -> Res<()> {
-        let line = self.line;
-        self.skip_ws()?;
-        match self.b.get(self.pos) {
-            Some(b';') => {
-                self.pos += 1;
-                Ok(())
-            }
-            None => Err(self.eof("';'")),
-            Some(_) => Err(P21Error::MissingSemicolon {
-                line,
-                entity: self.entity,
-                found: self.found(),
-            }),
-        }
-    }
-
     fn header(&mut self, file: &mut P21File) -> Res<()> {
         loop {
             self.skip_ws()?;
@@ -538,7 +521,7 @@ impl<'a> Parser<'a> {
                 Some(&c) if is_keyword_start(c) => {
                     let start = self.pos;
                     if self.section_word() == "ENDSEC" {
-                        return self.expect_semicolon_after_keyword();
+                        return self.end_of_record();
                     }
                     self.pos = start;
                     let record = self.record()?;
@@ -572,7 +555,7 @@ impl<'a> Parser<'a> {
                 Some(&c) if is_keyword_start(c) => {
                     let start = self.pos;
                     if self.section_word() == "ENDSEC" {
-                        return self.expect_semicolon_after_keyword();
+                        return self.end_of_record();
                     }
                     self.pos = start;
                     return Err(self.unexpected("'#' starting an entity instance, or ENDSEC"));
@@ -595,7 +578,7 @@ impl<'a> Parser<'a> {
                 }
                 Some(&c) if is_keyword_start(c) => {
                     if self.section_word() == "ENDSEC" {
-                        return self.expect_semicolon_after_keyword();
+                        return self.end_of_record();
                     }
                 }
                 Some(_) => self.pos += 1,
@@ -657,7 +640,7 @@ impl<'a> Parser<'a> {
         Ok(Entity { id, line, parts })
     }
 
-    /// Expects the `;` that ends a record.
+    /// Expects the `;` that ends a record or a section keyword.
     fn end_of_record(&mut self) -> Res<()> {
         let line = self.line;
         self.skip_ws()?;
