@@ -44,31 +44,24 @@ impl TrimEdge {
     /// from `start` to `end`. `None` when the vertices are not on the curve (within `tol`) or
     /// the curve is not finite there.
     pub fn new(id: u64, curve: Curve3D, start: DVec3, end: DVec3, tol: f64) -> Option<TrimEdge> {
-        let (a, b) = curve.try_range_tuple()?;
-        if !(a.is_finite() && b.is_finite()) {
-            return None;
-        }
-        let pa = to_dvec(curve.subs(a));
-        let pb = to_dvec(curve.subs(b));
-        let (t0, t1) = if pa.distance(start) <= tol && pb.distance(end) <= tol {
-            (a, b)
-        } else if pb.distance(start) <= tol && pa.distance(end) <= tol {
-            (b, a)
-        } else {
-            // The curve is longer than the edge: locate the vertices on it.
-            let s = curve.search_nearest_parameter(to_point(start), None, 30)?;
-            let e = curve.search_nearest_parameter(to_point(end), None, 30)?;
-            if to_dvec(curve.subs(s)).distance(start) > tol
-                || to_dvec(curve.subs(e)).distance(end) > tol
-            {
-                return None;
+        let range = curve
+            .try_range_tuple()
+            .filter(|(a, b)| a.is_finite() && b.is_finite());
+        let ends = range.map(|(a, b)| (a, b, to_dvec(curve.subs(a)), to_dvec(curve.subs(b))));
+        let (t0, t1) = match ends {
+            Some((a, b, pa, pb)) if pa.distance(start) <= tol && pb.distance(end) <= tol => (a, b),
+            Some((a, b, pa, pb)) if pb.distance(start) <= tol && pa.distance(end) <= tol => (b, a),
+            _ => {
+                // The curve is longer than the edge (or unbounded, a line): locate the
+                // vertices on it.
+                let s = locate(&curve, start, range, tol)?;
+                let e = locate(&curve, end, range, tol)?;
+                match curve.period() {
+                    // A closed edge on a periodic curve runs once around.
+                    Some(p) if (s - e).abs() < 1e-12 => (s, s + p),
+                    _ => (s, e),
+                }
             }
-            let (s, e) = match curve.period() {
-                // A closed edge on a periodic curve runs once around.
-                Some(p) if (s - e).abs() < 1e-12 => (s, s + p),
-                _ => (s, e),
-            };
-            (s, e)
         };
         let mid = to_dvec(curve.subs(0.5 * (t0 + t1)));
         if !(mid.is_finite() && start.is_finite() && end.is_finite()) {
@@ -93,6 +86,35 @@ impl TrimEdge {
     pub fn is_closed(&self) -> bool {
         self.start == self.end
     }
+}
+
+/// Parameter of `p` on `curve` (within `tol`): truck's search, else Newton from the tangent
+/// estimate at the start of the range (or at 0 for an unbounded curve such as a line).
+fn locate(curve: &Curve3D, p: DVec3, range: Option<(f64, f64)>, tol: f64) -> Option<f64> {
+    let on = |t: f64| t.is_finite() && to_dvec(curve.subs(t)).distance(p) <= tol;
+    if let Some(t) = curve.search_nearest_parameter(to_point(p), None, 30)
+        && on(t)
+    {
+        return Some(t);
+    }
+    let t0 = range.map_or(0.0, |r| r.0);
+    let d = vec_to_dvec(curve.der(t0));
+    let mut t = t0 + (p - to_dvec(curve.subs(t0))).dot(d) / d.length_squared().max(1e-300);
+    for _ in 0..30 {
+        let r = to_dvec(curve.subs(t)) - p;
+        let d1 = vec_to_dvec(curve.der(t));
+        let d2 = vec_to_dvec(curve.der2(t));
+        let den = d1.length_squared() + r.dot(d2);
+        if !(den.abs() > 1e-300) {
+            break;
+        }
+        let step = r.dot(d1) / den;
+        t -= step;
+        if !t.is_finite() || step.abs() <= 1e-14 * (1.0 + t.abs()) {
+            break;
+        }
+    }
+    on(t).then_some(t)
 }
 
 /// An edge of a loop, with the direction the loop runs it.
@@ -151,15 +173,21 @@ impl TrimmedFace {
         (cu, cv)
     }
 
-    /// Nearest of a 24 × 24 grid of parameters over the finite range (truck's searches need a
-    /// start on some surfaces).
-    fn coarse_guess(&self, p: DVec3) -> Option<DVec2> {
+    /// The few nearest of a 24 × 24 grid of parameters over the finite range, best first
+    /// (truck's searches need a start on some surfaces; a self-intersecting spindle torus has
+    /// two sheets close together, so one guess is not enough).
+    fn coarse_guesses(&self, p: DVec3) -> Vec<DVec2> {
         let (ru, rv) = parameter_bounds(&self.surface);
         let (pu, pv) = self.surface.periods();
-        let (u0, u1) = ru.or(pu.map(|p| (0.0, p)))?;
-        let (v0, v1) = rv.or(pv.map(|p| (0.0, p)))?;
+        let (Some((u0, u1)), Some((v0, v1))) = (
+            ru.or(pu.map(|p| (0.0, p))),
+            rv.or(pv.map(|p| (0.0, p))),
+        ) else {
+            return Vec::new();
+        };
         const N: usize = 24;
-        let mut best = (f64::INFINITY, DVec2::ZERO);
+        const KEEP: usize = 4;
+        let mut best: Vec<(f64, DVec2)> = Vec::with_capacity(KEEP + 1);
         for i in 0..=N {
             for j in 0..=N {
                 let uv = DVec2::new(
@@ -167,32 +195,81 @@ impl TrimmedFace {
                     v0 + (v1 - v0) * j as f64 / N as f64,
                 );
                 let d = self.surface.point(uv).distance_squared(p);
-                if d < best.0 {
-                    best = (d, uv);
+                if !d.is_finite() || best.len() == KEEP && d >= best[KEEP - 1].0 {
+                    continue;
                 }
+                let at = best.partition_point(|b| b.0 <= d);
+                best.insert(at, (d, uv));
+                best.truncate(KEEP);
             }
         }
-        best.0.is_finite().then_some(best.1)
+        best.into_iter().map(|b| b.1).collect()
     }
 
-    /// Gauss–Newton on |S(u, v) − p|² from `uv` (fallback when truck's search gives up).
+    /// Gauss–Newton on |S(u, v) − p|² from `uv`, on the wrapped surface (so it runs across
+    /// the seam of a closed direction) and kept inside the finite range elsewhere.
     fn newton(&self, p: DVec3, mut uv: DVec2) -> Option<DVec2> {
-        for _ in 0..40 {
-            let s = self.surface.point(uv);
-            let (su, sv) = self.surface.derivs(uv);
-            let r = s - p;
+        // Only B-spline surfaces end at their knot range (analytic ones report a nominal range).
+        let bspline = matches!(
+            self.surface,
+            TruckSurface::BSplineSurface(_) | TruckSurface::NurbsSurface(_)
+        );
+        let (ru, rv) = if bspline {
+            parameter_bounds(&self.surface)
+        } else {
+            (None, None)
+        };
+        let clamp = |x: f64, r: Interval, closed: bool| match r {
+            Some((a, b)) if !closed => x.clamp(a, b),
+            _ => x,
+        };
+        let (pu, pv) = self.periods();
+        // Outside its knot range a B-spline extrapolates, and may meet `p` there: start inside.
+        uv = DVec2::new(clamp(uv.x, ru, pu.is_some()), clamp(uv.y, rv, pv.is_some()));
+        // Levenberg–Marquardt: Gauss–Newton steps, damped until the distance decreases (a
+        // plain Gauss–Newton step can stall at a singular point such as a cone's apex).
+        let mut lambda = 1e-6;
+        let mut r = self.point(uv) - p;
+        for _ in 0..60 {
+            let (su, sv) = self.derivs(uv);
             let (a, b, c) = (su.dot(su), su.dot(sv), sv.dot(sv));
-            let det = a * c - b * b;
-            if det.abs() <= 1e-300 || det.is_nan() {
+            let (gu, gv) = (su.dot(r), sv.dot(r));
+            if !(a.is_finite() && b.is_finite() && c.is_finite() && gu.is_finite() && gv.is_finite())
+            {
                 break;
             }
-            let (gu, gv) = (su.dot(r), sv.dot(r));
-            let step = DVec2::new((c * gu - b * gv) / det, (a * gv - b * gu) / det);
-            uv -= step;
-            if !uv.is_finite() {
-                return None;
+            let mut accepted = false;
+            while lambda < 1e12 {
+                let (ad, cd) = (a + lambda * a.max(1e-300), c + lambda * c.max(1e-300));
+                let det = ad * cd - b * b;
+                if !(det.abs() > 1e-300) {
+                    lambda *= 4.0;
+                    continue;
+                }
+                let mut step = DVec2::new((cd * gu - b * gv) / det, (ad * gv - b * gu) / det);
+                // At most a quarter turn per step in a periodic direction.
+                let limit = |x: f64, period: Option<f64>| match period {
+                    Some(p) if p > 0.0 => x.clamp(-0.25 * p, 0.25 * p),
+                    _ => x,
+                };
+                step = DVec2::new(limit(step.x, pu), limit(step.y, pv));
+                let next = uv - step;
+                let next = DVec2::new(
+                    clamp(next.x, ru, pu.is_some()),
+                    clamp(next.y, rv, pv.is_some()),
+                );
+                let rn = self.point(next) - p;
+                if next.is_finite() && rn.length_squared() <= r.length_squared() {
+                    let moved = next.distance(uv);
+                    uv = next;
+                    r = rn;
+                    lambda = (lambda / 4.0).max(1e-9);
+                    accepted = moved >= 1e-13 * (1.0 + uv.length());
+                    break;
+                }
+                lambda *= 4.0;
             }
-            if step.length() < 1e-12 * (1.0 + uv.length()) {
+            if !accepted {
                 break;
             }
         }
@@ -221,11 +298,25 @@ impl SurfaceEval for TrimmedFace {
         self.surface.second_derivs(self.wrap(uv))
     }
 
+    /// Best of: truck's search from the (wrapped) hint or a coarse guess, polished by
+    /// Gauss–Newton on the wrapped surface, and Gauss–Newton from the hint itself (which runs
+    /// across a closed seam where truck's search stops at the end of the knot range).
     fn project(&self, p: DVec3, hint: Option<DVec2>) -> Option<DVec2> {
-        let hint = hint.map(|h| self.wrap(h)).or_else(|| self.coarse_guess(p));
-        self.surface
-            .project(p, hint)
-            .or_else(|| hint.and_then(|h| self.newton(p, h)))
+        let guesses = match hint {
+            Some(h) => vec![h],
+            None => self.coarse_guesses(p),
+        };
+        let start = guesses.first().map(|h| self.wrap(*h));
+        let truck = self
+            .surface
+            .project(p, start)
+            .map(|uv| self.wrap(uv))
+            .and_then(|uv| self.newton(p, uv));
+        let off = |uv: &DVec2| self.point(*uv).distance_squared(p);
+        truck
+            .into_iter()
+            .chain(guesses.iter().filter_map(|g| self.newton(p, *g)))
+            .min_by(|a, b| off(a).total_cmp(&off(b)))
     }
 
     fn periods(&self) -> (Option<f64>, Option<f64>) {

@@ -16,9 +16,11 @@
 //! 3. **Interior** — a grid whose steps follow from ε and the largest second derivatives
 //!    sampled on the domain (`(M_uu h_u² + 2 M_uv h_u h_v + M_vv h_v²)/8 ≤ ε`), points
 //!    strictly inside the trimmed domain and away from its border.
-//! 4. **Constrained Delaunay** (spade) of grid and border in a parameter space scaled by the
-//!    mean speeds |S_u|, |S_v|; triangles outside the domain are dropped (parity across the
-//!    constraint edges).
+//! 4. **Constrained Delaunay** (spade) of grid and border in a parameter space scaled to the
+//!    error metric — one unit per grid step, so a unit cell holds ε and triangles stretch along
+//!    directions that do not curve (a cylinder's axis); a flat face is scaled by its mean
+//!    speeds |S_u|, |S_v| instead. Triangles outside the domain are dropped (parity across
+//!    the constraint edges).
 //! 5. **Measured error** — the distance between the surface and the triangle at 7 samples per
 //!    triangle (centroid, edge midpoints, inner points); triangles above ε get their centroid
 //!    inserted, for a few rounds. The maximum measured is returned with the mesh.
@@ -294,7 +296,10 @@ impl TrimmedTessellator {
         p: Option<DVec3>,
         s: &impl SurfaceEval,
     ) -> Result<FixedVertexHandle, TrimError> {
+        // spade refuses non-zero coordinates below 2^-142: flush such dust to zero.
+        let flush = |x: f64| if x.abs() < 1e-40 { 0.0 } else { x };
         let q = uv * scale;
+        let q = DVec2::new(flush(q.x), flush(q.y));
         if !q.is_finite() {
             return Err(TrimError::NotFinite);
         }
@@ -680,7 +685,10 @@ fn refine_border(face: &TrimmedFace, lp: &mut Vec<BPoint>, tol: f64) {
         let mid_uv = 0.5 * (a.uv + b.uv);
         let chord = 0.5 * (a.p + b.p);
         let on_surface = s.point(mid_uv);
-        if on_surface.distance(chord) <= tol || a.uv.distance(b.uv) < 1e-12 {
+        // A border point off the surface (a model whose edge curves miss their surface) keeps
+        // its gap however finely the segment is split: allow the gaps of both ends.
+        let gap = 0.5 * (s.point(a.uv).distance(a.p) + s.point(b.uv).distance(b.p));
+        if on_surface.distance(chord) <= tol + gap || a.uv.distance(b.uv) < 1e-12 {
             k += 1;
             continue;
         }
@@ -864,6 +872,21 @@ fn grid_steps(s: &impl SurfaceEval, lo: DVec2, hi: DVec2, eps: f64) -> (DVec2, (
     };
     let nu = steps_for(muu, size.x, mvv);
     let nv = steps_for(mvv, size.y, muu);
+    // Where the surface curves, measure in grid steps (the error metric: a unit cell holds ε),
+    // so Delaunay triangles follow the curvature — long along a cylinder's straight direction.
+    // A flat face keeps the 3D speeds (well-shaped triangles; any shape is exact there).
+    let scale = if nu > 1 || nv > 1 {
+        let f = |n: usize, len: f64, sp: f64| {
+            if len > 1e-300 {
+                n as f64 / len
+            } else {
+                sp
+            }
+        };
+        DVec2::new(f(nu, size.x, scale.x), f(nv, size.y, scale.y))
+    } else {
+        scale
+    };
     (scale, (nu, nv))
 }
 

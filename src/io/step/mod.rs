@@ -26,7 +26,7 @@ use rayon::prelude::*;
 use truck_stepio::r#in::alias::re_exports::Point3;
 use truck_stepio::r#in::ruststep::ast::Name;
 use truck_stepio::r#in::ruststep::tables::{IntoOwned, PlaceHolder};
-use truck_stepio::r#in::{EdgeCurveHolder, FaceSurfaceHolder, Table};
+use truck_stepio::r#in::{CurveAnyHolder, EdgeCurve, EdgeCurveHolder, FaceSurfaceHolder, Table};
 
 use super::LoadError;
 use crate::isolate::isolated;
@@ -362,7 +362,7 @@ fn convert_face(
                         .edge_curve
                         .get(&ecid)
                         .ok_or_else(|| format!("edge #{ecid} is not a readable EDGE_CURVE"))?;
-                    let e = convert_edge(table, ecid, holder)?;
+                    let e = convert_edge(file, table, ecid, holder)?;
                     let e = Arc::new(e);
                     edges.insert(ecid, e.clone());
                     e
@@ -429,20 +429,56 @@ fn plane_from_file(file: &p21::P21File, face: u64) -> Option<TruckSurface> {
     surface_is_finite(&s).then_some(s)
 }
 
-fn convert_edge(table: &Table, id: u64, holder: &EdgeCurveHolder) -> Result<TrimEdge, String> {
+fn convert_edge(
+    file: &p21::P21File,
+    table: &Table,
+    id: u64,
+    holder: &EdgeCurveHolder,
+) -> Result<TrimEdge, String> {
     let ec = holder
         .clone()
         .into_owned(table)
         .map_err(|e| format!("edge #{id}: {e}"))?;
     let start = to_dvec(Point3::from(&ec.edge_start.vertex_geometry));
     let end = to_dvec(Point3::from(&ec.edge_end.vertex_geometry));
+    let size = start.length().max(end.length()).max(start.distance(end));
+    let tol = 1e-4 * (1.0 + size);
+    // truck-stepio follows a SURFACE_CURVE's preferred representation, which may be a
+    // parameter-space curve (its parameters need not match truck's surface, and it only
+    // approximates the edge); the 3D curve of a SURFACE_CURVE / SEAM_CURVE is exact: use it.
+    let curve_3d = holder_ref(&holder.edge_geometry)
+        .and_then(|g| file.get(g))
+        .and_then(p21::Entity::record)
+        .filter(|r| r.name == "SURFACE_CURVE" || r.name == "SEAM_CURVE")
+        .and_then(|r| r.ref_at(1));
+    let exact = curve_3d.and_then(|c3d| {
+        let geometry = PlaceHolder::<CurveAnyHolder>::Ref(Name::Entity(c3d))
+            .into_owned(table)
+            .ok()?;
+        EdgeCurve {
+            edge_geometry: geometry,
+            ..ec.clone()
+        }
+        .parse_curve3d()
+        .ok()
+    });
+    if let Some(curve) = exact
+        && let Some(e) = TrimEdge::new(id, curve, start, end, tol)
+    {
+        return Ok(e);
+    }
     let curve = ec
         .parse_curve3d()
         .map_err(|e| format!("edge #{id}: curve not supported: {e}"))?;
-    let size = start.length().max(end.length()).max(start.distance(end));
-    let tol = 1e-4 * (1.0 + size);
     TrimEdge::new(id, curve, start, end, tol)
         .ok_or_else(|| format!("edge #{id}: its vertices are not on its curve"))
+}
+
+fn holder_ref<T>(p: &PlaceHolder<T>) -> Option<u64> {
+    match p {
+        PlaceHolder::Ref(Name::Entity(id)) => Some(*id),
+        _ => None,
+    }
 }
 
 /// Coarse tessellation of a face: its bounding sphere (grown by the error) and box.
