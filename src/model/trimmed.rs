@@ -105,7 +105,7 @@ fn locate(curve: &Curve3D, p: DVec3, range: Option<(f64, f64)>, tol: f64) -> Opt
         let d1 = vec_to_dvec(curve.der(t));
         let d2 = vec_to_dvec(curve.der2(t));
         let den = d1.length_squared() + r.dot(d2);
-        if !(den.abs() > 1e-300) {
+        if den.is_nan() || den.abs() <= 1e-300 {
             break;
         }
         let step = r.dot(d1) / den;
@@ -179,10 +179,9 @@ impl TrimmedFace {
     fn coarse_guesses(&self, p: DVec3) -> Vec<DVec2> {
         let (ru, rv) = parameter_bounds(&self.surface);
         let (pu, pv) = self.surface.periods();
-        let (Some((u0, u1)), Some((v0, v1))) = (
-            ru.or(pu.map(|p| (0.0, p))),
-            rv.or(pv.map(|p| (0.0, p))),
-        ) else {
+        let (Some((u0, u1)), Some((v0, v1))) =
+            (ru.or(pu.map(|p| (0.0, p))), rv.or(pv.map(|p| (0.0, p))))
+        else {
             return Vec::new();
         };
         const N: usize = 24;
@@ -209,16 +208,7 @@ impl TrimmedFace {
     /// Gauss–Newton on |S(u, v) − p|² from `uv`, on the wrapped surface (so it runs across
     /// the seam of a closed direction) and kept inside the finite range elsewhere.
     fn newton(&self, p: DVec3, mut uv: DVec2) -> Option<DVec2> {
-        // Only B-spline surfaces end at their knot range (analytic ones report a nominal range).
-        let bspline = matches!(
-            self.surface,
-            TruckSurface::BSplineSurface(_) | TruckSurface::NurbsSurface(_)
-        );
-        let (ru, rv) = if bspline {
-            parameter_bounds(&self.surface)
-        } else {
-            (None, None)
-        };
+        let (ru, rv) = knot_bounds(&self.surface);
         let clamp = |x: f64, r: Interval, closed: bool| match r {
             Some((a, b)) if !closed => x.clamp(a, b),
             _ => x,
@@ -234,7 +224,11 @@ impl TrimmedFace {
             let (su, sv) = self.derivs(uv);
             let (a, b, c) = (su.dot(su), su.dot(sv), sv.dot(sv));
             let (gu, gv) = (su.dot(r), sv.dot(r));
-            if !(a.is_finite() && b.is_finite() && c.is_finite() && gu.is_finite() && gv.is_finite())
+            if !(a.is_finite()
+                && b.is_finite()
+                && c.is_finite()
+                && gu.is_finite()
+                && gv.is_finite())
             {
                 break;
             }
@@ -242,7 +236,7 @@ impl TrimmedFace {
             while lambda < 1e12 {
                 let (ad, cd) = (a + lambda * a.max(1e-300), c + lambda * c.max(1e-300));
                 let det = ad * cd - b * b;
-                if !(det.abs() > 1e-300) {
+                if det.is_nan() || det.abs() <= 1e-300 {
                     lambda *= 4.0;
                     continue;
                 }
@@ -383,4 +377,13 @@ pub fn parameter_bounds(s: &TruckSurface) -> (Interval, Interval) {
     let (u, v) = s.try_range_tuple();
     let finite = |r: Option<(f64, f64)>| r.filter(|(a, b)| a.is_finite() && b.is_finite());
     (finite(u), finite(v))
+}
+
+/// Where a surface really ends: the knot range of a B-spline surface; `None` for analytic
+/// surfaces, whose reported range is nominal (truck gives a cone or a plane `0..1`).
+pub fn knot_bounds(s: &TruckSurface) -> (Interval, Interval) {
+    match s {
+        TruckSurface::BSplineSurface(_) | TruckSurface::NurbsSurface(_) => parameter_bounds(s),
+        _ => (None, None),
+    }
 }

@@ -32,7 +32,9 @@ use spade::handles::FixedVertexHandle;
 use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation};
 
 use super::{PatchMesh, Resolution};
-use crate::model::trimmed::{LoopEdge, SurfaceEval, TrimmedFace, parameter_bounds};
+use crate::model::trimmed::{
+    Interval, LoopEdge, SurfaceEval, TrimmedFace, TruckSurface, parameter_bounds,
+};
 
 /// Most segments one edge polyline may have.
 const MAX_EDGE_SEGMENTS: usize = 1 << 14;
@@ -571,7 +573,7 @@ fn close_wrapping_loops(face: &TrimmedFace, loops: &mut Vec<Vec<BPoint>>) -> Res
         1 => {
             let i = wrapping[0];
             let (wu, wv) = winding(&loops[i], pu, pv);
-            let (ru, rv) = parameter_bounds(&face.surface);
+            let (ru, rv) = closing_bounds(&face.surface);
             let lp = &mut loops[i];
             let Some(first) = lp.first().copied() else {
                 return Ok(());
@@ -579,21 +581,33 @@ fn close_wrapping_loops(face: &TrimmedFace, loops: &mut Vec<Vec<BPoint>>) -> Res
             // The loop runs from `first` to `first + w·P`; close it on the side of the domain.
             let end =
                 first.uv + DVec2::new(wu as f64 * pu.unwrap_or(0.0), wv as f64 * pv.unwrap_or(0.0));
+            // A cone's loop is closed at its apex (truck reports a nominal range for cones);
+            // otherwise at the end of the range on the side of the domain.
+            let apex = |along_u: bool| {
+                singular_range(s, first.uv, along_u).map(|(a, b)| {
+                    let t0 = if along_u { first.uv.x } else { first.uv.y };
+                    if (a - t0).abs() > (b - t0).abs() {
+                        a
+                    } else {
+                        b
+                    }
+                })
+            };
             let (a, b) = if wu != 0 {
-                let Some((vmin, vmax)) = rv.or_else(|| singular_range(s, first.uv, false)) else {
-                    return Err(TrimError::UnboundedWrap);
+                let v = match rv {
+                    // Running +u, the left side is +v.
+                    Some((_, vmax)) if (wu > 0) == face.domain_left => vmax,
+                    Some((vmin, _)) => vmin,
+                    None => apex(false).ok_or(TrimError::UnboundedWrap)?,
                 };
-                // Running +u, the left side is +v.
-                let up = (wu > 0) == face.domain_left;
-                let v = if up { vmax } else { vmin };
                 (DVec2::new(end.x, v), DVec2::new(first.uv.x, v))
             } else {
-                let Some((umin, umax)) = ru.or_else(|| singular_range(s, first.uv, true)) else {
-                    return Err(TrimError::UnboundedWrap);
+                let u = match ru {
+                    // Running +v, the left side is −u.
+                    Some((umin, _)) if (wv > 0) == face.domain_left => umin,
+                    Some((_, umax)) => umax,
+                    None => apex(true).ok_or(TrimError::UnboundedWrap)?,
                 };
-                // Running +v, the left side is −u.
-                let left = (wv > 0) == face.domain_left;
-                let u = if left { umin } else { umax };
                 (DVec2::new(u, end.y), DVec2::new(u, first.uv.y))
             };
             let mut add = |uv: DVec2| {
@@ -646,6 +660,21 @@ fn close_wrapping_loops(face: &TrimmedFace, loops: &mut Vec<Vec<BPoint>>) -> Res
             Ok(())
         }
         n => Err(TrimError::WrapCount(n)),
+    }
+}
+
+/// The parameter range a loop running around the surface is closed along: none for a cone
+/// (truck reports a nominal `0..1`; the loop is closed at the apex), else the surface's range
+/// (a sphere's poles, a B-spline's knot range).
+fn closing_bounds(s: &TruckSurface) -> (Interval, Interval) {
+    use truck_stepio::r#in::alias::ElementarySurface;
+    match s {
+        TruckSurface::ElementarySurface(e)
+            if matches!(**e, ElementarySurface::ConicalSurface(_)) =>
+        {
+            (None, None)
+        }
+        _ => parameter_bounds(s),
     }
 }
 
@@ -877,11 +906,7 @@ fn grid_steps(s: &impl SurfaceEval, lo: DVec2, hi: DVec2, eps: f64) -> (DVec2, (
     // A flat face keeps the 3D speeds (well-shaped triangles; any shape is exact there).
     let scale = if nu > 1 || nv > 1 {
         let f = |n: usize, len: f64, sp: f64| {
-            if len > 1e-300 {
-                n as f64 / len
-            } else {
-                sp
-            }
+            if len > 1e-300 { n as f64 / len } else { sp }
         };
         DVec2::new(f(nu, size.x, scale.x), f(nv, size.y, scale.y))
     } else {
