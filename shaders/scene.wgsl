@@ -9,7 +9,7 @@ struct Globals {
     forward: vec4<f32>,
     // xyz: unit direction towards the light.
     light: vec4<f32>,
-    // rgb: base colour for `lit` and `flat` shading.
+    // rgb: colour for `flat` shading, and for `lit` shading of patches without their own.
     color: vec4<f32>,
     // x: shading mode (0 lit, 1 flat, 2 ids).
     mode: vec4<u32>,
@@ -24,6 +24,8 @@ struct VsOut {
     @location(2) @interpolate(flat) patch_id: u32,
     // Where the fragment really is (differs from `world` on fat borders).
     @location(3) actual: vec3<f32>,
+    // The patch's own colour; alpha 0 for "use globals.color".
+    @location(4) @interpolate(flat) color: vec4<f32>,
 };
 
 @vertex
@@ -31,9 +33,11 @@ fn vs_surface(
     @location(0) position: vec3<f32>,
     @location(1) normal: vec3<f32>,
     @location(2) patch_id: u32,
+    @location(3) color: vec4<f32>,
 ) -> VsOut {
     var out: VsOut;
     out.clip = globals.view_proj * vec4<f32>(position, 1.0);
+    out.color = color;
     out.world = position;
     out.actual = position;
     out.normal = normal;
@@ -52,6 +56,7 @@ fn vs_border(
     @location(4) eps: f32,
     @location(5) patch_id: u32,
     @location(6) code: u32,
+    @location(7) color: vec4<f32>,
 ) -> VsOut {
     let p = fat_border_position(prev, cur, next, globals.eye.xyz, eps, code);
     var out: VsOut;
@@ -61,6 +66,7 @@ fn vs_border(
     out.actual = p;
     out.normal = normal;
     out.patch_id = patch_id;
+    out.color = color;
     return out;
 }
 
@@ -91,7 +97,7 @@ fn fs_color(in: VsOut) -> @location(0) vec4<f32> {
     let diffuse = max(dot(n, l), 0.0);
     let h = normalize(l + v);
     let spec = pow(max(dot(n, h), 0.0), 48.0);
-    let base = globals.color.rgb;
+    let base = select(globals.color.rgb, in.color.rgb, in.color.a > 0.5);
     let rgb = base * (0.22 + 0.78 * diffuse) + vec3<f32>(0.28 * spec);
     return vec4<f32>(min(rgb, vec3<f32>(1.0)), 1.0);
 }

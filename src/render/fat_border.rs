@@ -216,6 +216,8 @@ pub struct BorderVertex {
     pub eps: f32,
     pub patch_id: u32,
     pub code: u32,
+    /// The patch colour, packed (see `PatchMesh::color`).
+    pub color: [u8; 4],
 }
 
 impl BorderVertex {
@@ -254,6 +256,7 @@ impl BorderGeometry {
         let mut g = BorderGeometry::default();
         for m in meshes {
             let eps = m.eps_border() as f32;
+            let color = super::packed_color(m.color);
             for ring in &m.borders {
                 let n = ring.len();
                 let base = g.vertices.len() as u32;
@@ -273,6 +276,7 @@ impl BorderGeometry {
                             eps,
                             patch_id: m.patch_id,
                             code: slot | flag,
+                            color,
                         });
                     }
                 }

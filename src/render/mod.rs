@@ -115,6 +115,13 @@ struct SurfaceVertex {
     position: [f32; 3],
     normal: [f32; 3],
     patch_id: u32,
+    color: [u8; 4],
+}
+
+/// A patch colour as a vertex attribute (`Unorm8x4`): alpha 0 means "the default colour".
+pub(crate) fn packed_color(c: Option<[f32; 3]>) -> [u8; 4] {
+    let q = |x: f32| (x.clamp(0.0, 1.0) * 255.0).round() as u8;
+    c.map_or([0; 4], |c| [q(c[0]), q(c[1]), q(c[2]), 255])
 }
 
 /// Patch meshes uploaded to the GPU: one vertex/index buffer for all surfaces, one vertex
@@ -328,6 +335,7 @@ impl Renderer {
         let mut indices: Vec<u32> = Vec::new();
         for m in meshes {
             let base = vertices.len() as u32;
+            let color = packed_color(m.color);
             vertices.extend(
                 m.positions
                     .iter()
@@ -336,6 +344,7 @@ impl Renderer {
                         position: (*p).into(),
                         normal: (*n).into(),
                         patch_id: m.patch_id,
+                        color,
                     }),
             );
             indices.extend(m.triangles.iter().flatten().map(|i| base + i));
@@ -393,10 +402,12 @@ impl Renderer {
             Target::Color { samples } => (COLOR_FORMAT, samples, "fs_color"),
             Target::Depth => (LINEAR_DEPTH_FORMAT, 1, "fs_depth"),
         };
-        let surface_attrs = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Uint32];
+        let surface_attrs = wgpu::vertex_attr_array![
+            0 => Float32x3, 1 => Float32x3, 2 => Uint32, 3 => Unorm8x4
+        ];
         let border_attrs = wgpu::vertex_attr_array![
             0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Float32x3,
-            4 => Float32, 5 => Uint32, 6 => Uint32
+            4 => Float32, 5 => Uint32, 6 => Uint32, 7 => Unorm8x4
         ];
         let surface_buffers = [Some(wgpu::VertexBufferLayout {
             array_stride: std::mem::size_of::<SurfaceVertex>() as u64,

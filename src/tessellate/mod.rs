@@ -37,6 +37,9 @@ pub struct PatchMesh {
     pub trim_error: f64,
     /// Why the patch could not be tessellated (its mesh is then empty).
     pub failure: Option<String>,
+    /// The patch's own colour (a STEP part or face style), drawn by `lit` shading; `None`
+    /// draws the renderer's default colour.
+    pub color: Option<[f32; 3]>,
 }
 
 impl PatchMesh {
@@ -79,6 +82,7 @@ impl Tessellators {
         out: &mut PatchMesh,
     ) {
         out.patch_id = patch.id;
+        out.color = patch.color;
         out.failure = None;
         out.trim_error = 0.0;
         match &patch.surface {
