@@ -205,7 +205,7 @@ impl TrimmedFace {
         best.into_iter().map(|b| b.1).collect()
     }
 
-    /// Gauss–Newton on |S(u, v) − p|² from `uv`, on the wrapped surface (so it runs across
+    /// Levenberg–Marquardt on |S(u, v) − p|² from `uv`, on the wrapped surface (so it runs across
     /// the seam of a closed direction) and kept inside the finite range elsewhere.
     fn newton(&self, p: DVec3, mut uv: DVec2) -> Option<DVec2> {
         let (ru, rv) = knot_bounds(&self.surface);
