@@ -105,9 +105,10 @@ impl TrimmedTessellator {
         self.tessellate_with(face, eps, false, out)
     }
 
-    /// As [`TrimmedTessellator::tessellate`]. With `shared_borders`, border segments are not
+    /// As [`TrimmedTessellator::tessellate`]. With `shared_borders`, segments of edges are not
     /// split by the surface criterion of step 2 (which depends on the face), so two faces
-    /// tessellated with the same ε share their border points exactly.
+    /// tessellated with the same ε share their border points exactly; only the closing segments
+    /// this tessellator adds along a closed surface's bounds (shared with no other face) are.
     pub fn tessellate_with(
         &mut self,
         face: &TrimmedFace,
@@ -143,9 +144,7 @@ impl TrimmedTessellator {
         let mut loops = std::mem::take(&mut self.loops);
         close_wrapping_loops(face, &mut loops)?;
         for lp in loops.iter_mut() {
-            if !shared_borders {
-                refine_border(face, lp, eps * 0.5);
-            }
+            refine_border(face, lp, eps * 0.5, shared_borders);
             fix_poles(s, lp);
         }
         if loops.iter().all(|l| l.len() < 3) {
@@ -703,14 +702,19 @@ fn singular_range(s: &impl SurfaceEval, uv: DVec2, along_u: bool) -> Option<(f64
 }
 
 /// Splits border segments until the surface at the parameter midpoint is within `tol` of the
-/// 3D chord midpoint (so the triangles along the border hold the tolerance too).
-fn refine_border(face: &TrimmedFace, lp: &mut Vec<BPoint>, tol: f64) {
+/// 3D chord midpoint (so the triangles along the border hold the tolerance too). With
+/// `only_closing`, segments between two edge points are kept (shared-border mode).
+fn refine_border(face: &TrimmedFace, lp: &mut Vec<BPoint>, tol: f64, only_closing: bool) {
     let s = face;
     let mut k = 0;
     let mut budget = 8 * lp.len() + 256;
     while k < lp.len() && budget > 0 {
         let a = lp[k];
         let b = lp[(k + 1) % lp.len()];
+        if only_closing && a.src.is_some() && b.src.is_some() {
+            k += 1;
+            continue;
+        }
         let mid_uv = 0.5 * (a.uv + b.uv);
         let chord = 0.5 * (a.p + b.p);
         let on_surface = s.point(mid_uv);
