@@ -32,6 +32,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         fat_borders: FatBorders::Six,
         msaa: 1,
         depth: true,
+        ids: false,
     };
     let plain = RenderOptions {
         fat_borders: FatBorders::Off,

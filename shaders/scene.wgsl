@@ -105,6 +105,12 @@ fn fs_color(in: VsOut) -> @location(0) vec4<f32> {
 // Linear view-space depth (distance along the viewing axis), for crack checks and --depth-out,
 // as the bits of an f32 in an R32Uint target (32-bit float targets are not renderable on GL);
 // 0 is left where nothing is drawn.
+// Patch ID + 1 per pixel (0 where nothing is drawn): which patches are visible.
+@fragment
+fn fs_id(in: VsOut) -> @location(0) u32 {
+    return in.patch_id + 1u;
+}
+
 @fragment
 fn fs_depth(in: VsOut) -> @location(0) u32 {
     return bitcast<u32>(dot(in.actual - globals.eye.xyz, globals.forward.xyz));

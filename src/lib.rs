@@ -11,6 +11,7 @@
 pub mod check;
 pub mod io;
 pub mod isolate;
+pub mod lod;
 pub mod model;
 pub mod render;
 pub mod tessellate;

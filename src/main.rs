@@ -36,6 +36,44 @@ enum Command {
     Check(CheckArgs),
     /// Write the tessellation as binary glTF (.glb): one mesh per part, one node per placement.
     Export(ExportArgs),
+    /// Benchmarks: `--flythrough` drives a recorded camera path through the LOD frame loop.
+    Bench(BenchArgs),
+}
+
+#[derive(Args, Debug)]
+struct BenchArgs {
+    /// Model file (.bpt, .step, .stp).
+    file: PathBuf,
+    /// Run the fly-through: orbit, zoom in close, a sudden jump, then still.
+    #[arg(long)]
+    flythrough: bool,
+    /// Frames of the camera path.
+    #[arg(long, default_value_t = 200)]
+    frames: usize,
+    /// Re-tessellation time budget per frame, milliseconds.
+    #[arg(long, default_value_t = 40.0)]
+    budget_ms: f64,
+    /// Frame-rate target mode: choose the pixel error per frame to fit this frame time (ms).
+    #[arg(long)]
+    target_ms: Option<f64>,
+    /// Pixel error asked for (the finest one in frame-rate target mode).
+    #[arg(long, default_value_t = view::DEFAULT_PIXEL_ERROR)]
+    pixel_error: f64,
+    /// Image size.
+    #[arg(long, default_value = "1024x768", value_parser = parse_size)]
+    size: (u32, u32),
+    /// Vertical field of view in degrees.
+    #[arg(long, default_value_t = view::DEFAULT_FOV_Y_DEG)]
+    fov: f64,
+    /// Skip the per-frame crack measurement (it renders a reference; not timed either way).
+    #[arg(long)]
+    no_cracks: bool,
+    /// Per-frame CSV.
+    #[arg(long, default_value = "flythrough.csv")]
+    csv: PathBuf,
+    /// Plot of error and frame time over the frames.
+    #[arg(long, default_value = "flythrough.png")]
+    plot: PathBuf,
 }
 
 #[derive(Args, Debug)]
@@ -577,6 +615,112 @@ fn cmd_check(args: &CheckArgs) -> Result<bool, CliError> {
     Ok(ok)
 }
 
+fn cmd_bench(args: &BenchArgs) -> Result<bool, CliError> {
+    use patchwork::lod::LodOptions;
+    use patchwork::lod::flythrough::{FlythroughOptions, FrameRecord, plot, run};
+    if !args.flythrough {
+        return Err("say which benchmark: --flythrough".into());
+    }
+    check_fov(args.fov)?;
+    check_pixel_error(args.pixel_error)?;
+    if args.frames < 2 {
+        return Err("--frames must be at least 2".into());
+    }
+    if !(args.budget_ms.is_finite() && args.budget_ms > 0.0) {
+        return Err(format!(
+            "--budget-ms must be a positive number, not {}",
+            args.budget_ms
+        )
+        .into());
+    }
+    if let Some(t) = args.target_ms
+        && !(t.is_finite() && t > 0.0)
+    {
+        return Err(format!("--target-ms must be a positive number, not {t}").into());
+    }
+    let scene = load(&args.file)?;
+    let mut renderer = Renderer::new()?;
+    eprintln!("adapter: {}", renderer.gpu().describe());
+    let opts = FlythroughOptions {
+        frames: args.frames,
+        size: args.size,
+        fov_y: args.fov.to_radians(),
+        lod: LodOptions {
+            pixel_error: args.pixel_error,
+            budget: std::time::Duration::from_secs_f64(args.budget_ms / 1e3),
+            ..LodOptions::default()
+        },
+        target: args
+            .target_ms
+            .map(|t| std::time::Duration::from_secs_f64(t / 1e3)),
+        cracks: !args.no_cracks,
+    };
+    let pb = ProgressBar::new(args.frames as u64);
+    pb.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} frames {elapsed}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let (records, summary) = run(&mut renderer, &scene, &opts, |_| pb.inc(1))?;
+    pb.finish_and_clear();
+    let mut csv = String::from(FrameRecord::CSV_HEADER);
+    csv.push('\n');
+    for r in &records {
+        csv.push_str(&r.csv_row());
+        csv.push('\n');
+    }
+    png::write_text(&args.csv, &csv)?;
+    png::write_rgba(
+        &args.plot,
+        &plot(&records, args.budget_ms, summary.jump_frame),
+    )?;
+    let frames = records.len();
+    println!(
+        "fly-through of {} ({} patches), {frames} frames at {}x{}, budget {} ms, pixel error {}{}",
+        args.file.display(),
+        scene.patches.len(),
+        args.size.0,
+        args.size.1,
+        args.budget_ms,
+        args.pixel_error,
+        args.target_ms
+            .map_or(String::new(), |t| format!(", frame-rate target {t} ms"))
+    );
+    println!("initial tessellation      {:.1} ms", summary.initial_ms);
+    println!(
+        "frame time                p50 {:.2} ms, p99 {:.2} ms",
+        summary.p50_frame_ms, summary.p99_frame_ms
+    );
+    println!(
+        "re-tessellation per frame p99 {:.2} ms (budget {} ms)",
+        summary.p99_tessellation_ms, args.budget_ms
+    );
+    match (summary.converge_ms, summary.converge_frames) {
+        (Some(ms), Some(f)) => println!(
+            "after the jump (frame {}) every visible patch is within the pixel error in {:.0} ms ({f} frames)",
+            summary.jump_frame, ms
+        ),
+        _ => println!(
+            "after the jump (frame {}) the visible patches never got within the pixel error",
+            summary.jump_frame
+        ),
+    }
+    if let Some(t) = args.target_ms {
+        let mean: f64 = records.iter().map(|r| r.frame_ms).sum::<f64>() / frames as f64;
+        let tail = &records[frames / 2..];
+        let tail_mean = tail.iter().map(|r| r.frame_ms).sum::<f64>() / tail.len() as f64;
+        let pe = tail.iter().map(|r| r.pixel_error).sum::<f64>() / tail.len() as f64;
+        println!(
+            "frame-rate target         {t} ms: achieved mean {mean:.2} ms (second half {tail_mean:.2} ms at pixel error {pe:.2} on average)"
+        );
+    }
+    let crack_free = summary.max_crack_pixels.is_none_or(|m| m == 0);
+    if let (Some(max), Some(total)) = (summary.max_crack_pixels, summary.total_crack_pixels) {
+        println!("crack pixels              {total} in all, at most {max} in a frame");
+    }
+    println!("wrote {} and {}", args.csv.display(), args.plot.display());
+    Ok(crack_free)
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
@@ -584,6 +728,7 @@ fn main() -> ExitCode {
         Command::Stats(a) => cmd_stats(a).map(|()| true),
         Command::Check(a) => cmd_check(a),
         Command::Export(a) => cmd_export(a).map(|()| true),
+        Command::Bench(a) => cmd_bench(a),
     };
     match result {
         Ok(true) => ExitCode::SUCCESS,

@@ -439,6 +439,7 @@ pub fn run_check(
         fat_borders: FatBorders::Off,
         msaa: 1,
         depth: true,
+        ids: false,
     };
     for index in 0..opts.views {
         let view = random_view(scene, opts.seed, index, opts.size, opts.fov_y);
@@ -503,6 +504,7 @@ mod tests {
             height: h,
             color,
             depth: Some(depth),
+            ids: None,
         }
     }
 

@@ -50,6 +50,16 @@ fn write_atomic(
     result
 }
 
+/// Writes a text file (a CSV) atomically, like the images.
+pub fn write_text(path: &Path, text: &str) -> Result<(), WriteError> {
+    write_atomic(path, |tmp| {
+        std::fs::write(tmp, text).map_err(|source| WriteError::Io {
+            path: path.to_owned(),
+            source,
+        })
+    })
+}
+
 fn encode_err(path: &Path, e: image::ImageError) -> WriteError {
     match e {
         image::ImageError::IoError(source) => WriteError::Io {

@@ -252,7 +252,7 @@ pub struct BorderGeometry {
 impl BorderGeometry {
     /// The fat borders of every closed border loop of `meshes`, ε = each patch's
     /// [`PatchMesh::eps_border`].
-    pub fn of(meshes: &[PatchMesh]) -> BorderGeometry {
+    pub fn of<'a>(meshes: impl IntoIterator<Item = &'a PatchMesh>) -> BorderGeometry {
         let mut g = BorderGeometry::default();
         for m in meshes {
             let eps = m.eps_border() as f32;

@@ -63,6 +63,9 @@ pub struct RenderOptions {
     pub msaa: u32,
     /// Also render linear view-space depth (one sample per pixel).
     pub depth: bool,
+    /// Also render the patch ID buffer (one sample per pixel; fat borders count for their
+    /// patch): which patches are visible.
+    pub ids: bool,
 }
 
 impl Default for RenderOptions {
@@ -74,6 +77,7 @@ impl Default for RenderOptions {
             fat_borders: FatBorders::Six,
             msaa: 1,
             depth: false,
+            ids: false,
         }
     }
 }
@@ -88,9 +92,24 @@ pub struct Frame {
     /// Linear view-space depth per pixel (distance along the viewing axis), `f32::INFINITY`
     /// where nothing was drawn. Present when [`RenderOptions::depth`] was set.
     pub depth: Option<Vec<f32>>,
+    /// Patch ID + 1 per pixel, 0 where nothing was drawn. Present when [`RenderOptions::ids`]
+    /// was set.
+    pub ids: Option<Vec<u32>>,
 }
 
 impl Frame {
+    /// Which patch IDs show in at least one pixel, as a set indexed by ID (`len` IDs).
+    pub fn visible_ids(&self, len: usize) -> Option<Vec<bool>> {
+        let ids = self.ids.as_ref()?;
+        let mut seen = vec![false; len];
+        for &i in ids {
+            if let Some(s) = (i as usize).checked_sub(1).and_then(|k| seen.get_mut(k)) {
+                *s = true;
+            }
+        }
+        Some(seen)
+    }
+
     pub fn pixel(&self, x: u32, y: u32) -> [u8; 4] {
         let i = 4 * (y as usize * self.width as usize + x as usize);
         [
@@ -177,6 +196,7 @@ struct Pipelines {
 enum Target {
     Color { samples: u32 },
     Depth,
+    Ids,
 }
 
 const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
@@ -218,7 +238,7 @@ impl Targets {
     fn new(gpu: &Gpu, layout: &wgpu::BindGroupLayout, target: Target, w: u32, h: u32) -> Self {
         let (format, samples) = match target {
             Target::Color { samples } => (COLOR_FORMAT, samples),
-            Target::Depth => (LINEAR_DEPTH_FORMAT, 1),
+            Target::Depth | Target::Ids => (LINEAR_DEPTH_FORMAT, 1),
         };
         let device = &gpu.device;
         let size = wgpu::Extent3d {
@@ -330,10 +350,11 @@ impl Renderer {
     }
 
     /// Uploads patch meshes: surfaces and fat-border geometry ([`BorderGeometry`]).
-    pub fn upload(&self, meshes: &[PatchMesh]) -> GpuMeshes {
+    pub fn upload<'a>(&self, meshes: impl IntoIterator<Item = &'a PatchMesh>) -> GpuMeshes {
+        let meshes: Vec<&PatchMesh> = meshes.into_iter().collect();
         let mut vertices = Vec::new();
         let mut indices: Vec<u32> = Vec::new();
-        for m in meshes {
+        for m in meshes.iter().copied() {
             let base = vertices.len() as u32;
             let color = packed_color(m.color);
             vertices.extend(
@@ -349,7 +370,7 @@ impl Renderer {
             );
             indices.extend(m.triangles.iter().flatten().map(|i| base + i));
         }
-        let borders = BorderGeometry::of(meshes);
+        let borders = BorderGeometry::of(meshes.iter().copied());
         let device = &self.gpu.device;
         // Empty buffers are not allowed to be bound; keep at least one element.
         let init = |label, bytes: &[u8], usage| {
@@ -401,6 +422,7 @@ impl Renderer {
         let (format, samples, fs) = match target {
             Target::Color { samples } => (COLOR_FORMAT, samples, "fs_color"),
             Target::Depth => (LINEAR_DEPTH_FORMAT, 1, "fs_depth"),
+            Target::Ids => (LINEAR_DEPTH_FORMAT, 1, "fs_id"),
         };
         let surface_attrs = wgpu::vertex_attr_array![
             0 => Float32x3, 1 => Float32x3, 2 => Uint32, 3 => Unorm8x4
@@ -541,6 +563,18 @@ impl Renderer {
         } else {
             None
         };
+        let ids = if opts.ids {
+            let none = wgpu::Color {
+                r: 0.0,
+                g: 0.0,
+                b: 0.0,
+                a: 0.0,
+            };
+            let raw = self.draw(meshes, &globals, opts, Target::Ids, w, h, none)?;
+            Some(bytemuck::pod_collect_to_vec::<u8, u32>(&raw))
+        } else {
+            None
+        };
         if let Some(e) = pollster::block_on(oom.pop()) {
             return Err(RenderError::Gpu(e.to_string()));
         }
@@ -552,6 +586,7 @@ impl Renderer {
             height: h,
             color,
             depth,
+            ids,
         })
     }
 

@@ -128,6 +128,21 @@ impl View {
         -(self.view_matrix() * p.extend(1.0)).z
     }
 
+    /// Whether the sphere `s` reaches into the view frustum (side planes, near and far): what
+    /// frustum culling keeps.
+    pub fn sees_sphere(&self, s: &Sphere) -> bool {
+        let c = (self.view_matrix() * s.center.extend(1.0)).truncate();
+        let depth = -c.z;
+        if depth + s.radius < self.near || depth - s.radius > self.far {
+            return false;
+        }
+        let ty = (self.fov_y * 0.5).tan();
+        let tx = ty * self.aspect();
+        // Distance outside the side plane `|a| = t · depth` (planes through the eye).
+        let within = |a: f64, t: f64| (a.abs() - t * depth) / (1.0 + t * t).sqrt() <= s.radius;
+        within(c.x, tx) && within(c.y, ty)
+    }
+
     /// Projects a world point to pixel coordinates (x right, y down, centres at half-integers)
     /// and linear view depth. `None` behind the eye.
     pub fn project(&self, p: DVec3) -> Option<(f64, f64, f64)> {
@@ -175,6 +190,43 @@ mod tests {
         Sphere {
             center: DVec3::ZERO,
             radius: 1.0,
+        }
+    }
+
+    #[test]
+    fn frustum_culling_keeps_what_is_seen() {
+        let model = Sphere {
+            center: DVec3::ZERO,
+            radius: 1.0,
+        };
+        let view = View::new(
+            DVec3::new(0.0, 0.0, 10.0),
+            DVec3::ZERO,
+            DVec3::Y,
+            60f64.to_radians(),
+            (400, 300),
+            &model,
+        );
+        let sphere = |x: f64, y: f64, z: f64, r: f64| Sphere {
+            center: DVec3::new(x, y, z),
+            radius: r,
+        };
+        assert!(view.sees_sphere(&model));
+        // Half height of the frustum at depth 10 is 10 tan 30° = 5.77; half width 7.70.
+        assert!(view.sees_sphere(&sphere(0.0, 6.0, 0.0, 0.5)));
+        assert!(!view.sees_sphere(&sphere(0.0, 7.0, 0.0, 0.5)));
+        assert!(view.sees_sphere(&sphere(8.0, 0.0, 0.0, 0.5)));
+        assert!(!view.sees_sphere(&sphere(9.0, 0.0, 0.0, 0.5)));
+        // Behind the eye.
+        assert!(!view.sees_sphere(&sphere(0.0, 0.0, 12.0, 1.0)));
+        // Every point a view projects inside the image is in a sphere it sees.
+        for p in [DVec3::new(0.9, 0.0, 0.0), DVec3::new(-0.5, 0.5, 0.5)] {
+            let (x, y, _) = view.project(p).expect("in front of the eye");
+            assert!(x > 0.0 && x < 400.0 && y > 0.0 && y < 300.0);
+            assert!(view.sees_sphere(&Sphere {
+                center: p,
+                radius: 0.01
+            }));
         }
     }
 

@@ -1,0 +1,400 @@
+//! Deterministic fly-through: a recorded camera path (orbit, zoom in close, a sudden jump,
+//! then still) driven through the [`FrameLoop`], with per-frame figures, a summary and a plot.
+
+use std::time::{Duration, Instant};
+
+use glam::DVec3;
+
+use crate::check::crack::{CHECK_SURFACE, SENTINEL, classify, reference_meshes};
+use crate::lod::{FrameLoop, LodOptions, PixelErrorController};
+use crate::model::Scene;
+use crate::render::{FatBorders, RenderError, RenderOptions, Renderer, Shading};
+use crate::view::View;
+
+/// Where the camera is at frame `i` of `n`: orbit half a turn (40 % of the frames), zoom in
+/// to half the distance (25 %), jump to the far side at that close distance, and hold
+/// still (35 %) so the queue can converge.
+pub fn camera_path(scene: &Scene, i: usize, n: usize, fov_y: f64, size: (u32, u32)) -> View {
+    let up = scene.up.vector();
+    let framing = View::framing(&scene.bounds, up, fov_y, size);
+    let centre = scene.bounds.center;
+    let d0 = framing.eye.distance(centre);
+    let start = (framing.eye - centre).normalize();
+    let (orbit_end, zoom_end) = jump_frames(n);
+    let t = i as f64;
+    let rotate = |dir: DVec3, angle: f64| glam::DQuat::from_axis_angle(up, angle) * dir;
+    let close = 0.5;
+    let (dir, dist) = if i < orbit_end {
+        let s = t / orbit_end as f64;
+        (rotate(start, std::f64::consts::PI * s), d0)
+    } else if i < zoom_end {
+        let s = (t - orbit_end as f64) / (zoom_end - orbit_end) as f64;
+        let s = s * s * (3.0 - 2.0 * s);
+        (
+            rotate(start, std::f64::consts::PI),
+            d0 * (1.0 + (close - 1.0) * s),
+        )
+    } else {
+        // The jump: the opposite side, tilted, close.
+        let dir = rotate(start, 0.0) + up * 0.3;
+        (dir.normalize(), d0 * close)
+    };
+    View::new(centre + dir * dist, centre, up, fov_y, size, &scene.bounds)
+}
+
+/// (first zoom frame, the jump frame) of a path of `n` frames.
+pub fn jump_frames(n: usize) -> (usize, usize) {
+    let orbit_end = (n * 40 / 100).max(1);
+    let zoom_end = (n * 65 / 100).max(orbit_end + 1);
+    (orbit_end, zoom_end)
+}
+
+/// Settings of a fly-through run.
+#[derive(Clone, Debug)]
+pub struct FlythroughOptions {
+    pub frames: usize,
+    pub size: (u32, u32),
+    pub fov_y: f64,
+    pub lod: LodOptions,
+    /// Frame-rate target mode: pick the pixel error per frame for this frame time.
+    pub target: Option<Duration>,
+    /// Measure crack pixels every frame (against a watertight reference; not timed).
+    pub cracks: bool,
+}
+
+/// One frame's figures (one CSV row).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FrameRecord {
+    pub frame: usize,
+    /// Whole frame: culling, queue, re-tessellation, upload, draw, ID readback.
+    pub frame_ms: f64,
+    pub tessellation_ms: f64,
+    pub retessellated: usize,
+    pub from_cache: usize,
+    pub queue_left: usize,
+    /// Screen-space error of the patches visible in this frame, pixels.
+    pub max_error_px: f64,
+    pub p99_error_px: f64,
+    pub triangles: usize,
+    /// Pixel error asked for this frame.
+    pub pixel_error: f64,
+    /// Crack pixels (fat borders on), when measured.
+    pub crack_pixels: Option<usize>,
+}
+
+impl FrameRecord {
+    pub const CSV_HEADER: &'static str = "frame,frame_ms,tessellation_ms,retessellated,from_cache,queue_length,max_error_px,p99_error_px,triangles,pixel_error,crack_pixels";
+
+    pub fn csv_row(&self) -> String {
+        format!(
+            "{},{:.3},{:.3},{},{},{},{:.4},{:.4},{},{:.4},{}",
+            self.frame,
+            self.frame_ms,
+            self.tessellation_ms,
+            self.retessellated,
+            self.from_cache,
+            self.queue_left,
+            self.max_error_px,
+            self.p99_error_px,
+            self.triangles,
+            self.pixel_error,
+            self.crack_pixels.map_or(String::new(), |c| c.to_string())
+        )
+    }
+}
+
+/// Summary of a run.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FlythroughSummary {
+    pub initial_ms: f64,
+    pub jump_frame: usize,
+    /// Wall time from the jump frame until every visible patch is within the pixel error
+    /// (`None`: never within the run), and the frames it took.
+    pub converge_ms: Option<f64>,
+    pub converge_frames: Option<usize>,
+    pub p50_frame_ms: f64,
+    pub p99_frame_ms: f64,
+    pub p99_tessellation_ms: f64,
+    pub max_crack_pixels: Option<usize>,
+    pub total_crack_pixels: Option<usize>,
+}
+
+/// Runs the fly-through; `on_frame` sees every record (progress).
+pub fn run(
+    renderer: &mut Renderer,
+    scene: &Scene,
+    opts: &FlythroughOptions,
+    mut on_frame: impl FnMut(&FrameRecord),
+) -> Result<(Vec<FrameRecord>, FlythroughSummary), RenderError> {
+    let n = opts.frames.max(1);
+    let first = camera_path(scene, 0, n, opts.fov_y, opts.size);
+    let t0 = Instant::now();
+    let mut lod = FrameLoop::new(scene, &first, opts.lod);
+    let initial_ms = t0.elapsed().as_secs_f64() * 1e3;
+    let mut controller = opts
+        .target
+        .map(|t| PixelErrorController::new(t, opts.lod.pixel_error, 64.0));
+    let draw = RenderOptions {
+        ids: true,
+        ..RenderOptions::default()
+    };
+    let check = RenderOptions {
+        shading: Shading::Flat,
+        background: SENTINEL,
+        surface_color: CHECK_SURFACE,
+        fat_borders: FatBorders::Six,
+        msaa: 1,
+        depth: true,
+        ids: false,
+    };
+    let mut records = Vec::with_capacity(n);
+    for i in 0..n {
+        let view = camera_path(scene, i, n, opts.fov_y, opts.size);
+        let start = Instant::now();
+        let stats = lod.update(scene, &view);
+        let gpu = renderer.upload(lod.meshes());
+        let frame = renderer.render(&gpu, &view, &draw)?;
+        if let Some(v) = frame.visible_ids(scene.patches.len()) {
+            lod.set_visible(&v);
+        }
+        let frame_time = start.elapsed();
+        let (max_error_px, p99_error_px) = lod.screen_errors();
+        let pixel_error = lod.options.pixel_error;
+        // Cracks: against the reference for this view; the drawn tessellation may be behind
+        // (coarser than asked), so the tolerance is the error it has, not the one asked for.
+        let crack_pixels = if opts.cracks {
+            let (ref_meshes, _) = reference_meshes(scene, &view, pixel_error);
+            let reference = renderer.render(
+                &renderer.upload(&ref_meshes),
+                &view,
+                &RenderOptions {
+                    fat_borders: FatBorders::Off,
+                    ..check
+                },
+            )?;
+            let actual = renderer.render(&gpu, &view, &check)?;
+            let allowed = max_error_px.max(pixel_error);
+            let (c, _) = classify(&reference, &actual, &view, allowed, SENTINEL);
+            Some(c.cracks())
+        } else {
+            None
+        };
+        let record = FrameRecord {
+            frame: i,
+            frame_ms: frame_time.as_secs_f64() * 1e3,
+            tessellation_ms: stats.tessellation.as_secs_f64() * 1e3,
+            retessellated: stats.retessellated,
+            from_cache: stats.from_cache,
+            queue_left: stats.queue_left,
+            max_error_px,
+            p99_error_px,
+            triangles: stats.triangles,
+            pixel_error,
+            crack_pixels,
+        };
+        on_frame(&record);
+        records.push(record);
+        if let Some(c) = controller.as_mut() {
+            lod.options.pixel_error = c.observe(stats.triangles, frame_time);
+        }
+    }
+    let summary = summarize(&records, initial_ms, jump_frames(n).1);
+    Ok((records, summary))
+}
+
+fn percentile(values: &mut [f64], q: f64) -> f64 {
+    if values.is_empty() {
+        return 0.0;
+    }
+    values.sort_by(f64::total_cmp);
+    values[((values.len() - 1) as f64 * q).round() as usize]
+}
+
+/// Summary figures of a run whose camera jumps at `jump_frame`.
+pub fn summarize(records: &[FrameRecord], initial_ms: f64, jump_frame: usize) -> FlythroughSummary {
+    let mut frame: Vec<f64> = records.iter().map(|r| r.frame_ms).collect();
+    let mut tess: Vec<f64> = records.iter().map(|r| r.tessellation_ms).collect();
+    let mut converge_ms = None;
+    let mut converge_frames = None;
+    let mut elapsed = 0.0;
+    for r in records.iter().filter(|r| r.frame >= jump_frame) {
+        elapsed += r.frame_ms;
+        // Within the pixel error (and 1 % slack for rounding of ε levels).
+        if r.max_error_px <= r.pixel_error * 1.01 {
+            converge_ms = Some(elapsed);
+            converge_frames = Some(r.frame - jump_frame + 1);
+            break;
+        }
+    }
+    let cracks: Vec<usize> = records.iter().filter_map(|r| r.crack_pixels).collect();
+    FlythroughSummary {
+        initial_ms,
+        jump_frame,
+        converge_ms,
+        converge_frames,
+        p50_frame_ms: percentile(&mut frame.clone(), 0.5),
+        p99_frame_ms: percentile(&mut frame, 0.99),
+        p99_tessellation_ms: percentile(&mut tess, 0.99),
+        max_crack_pixels: cracks.iter().copied().max(),
+        total_crack_pixels: (!cracks.is_empty()).then(|| cracks.iter().sum()),
+    }
+}
+
+/// A plot of the run: top, screen error (max red, p99 orange, pixel error asked grey);
+/// bottom, frame time (blue) and re-tessellation time (green) with the budget (grey); the
+/// jump as a vertical black line. Scales: error 0..max(4 × pixel error, largest error), time
+/// 0..max(2 × budget, longest frame), both linear, marked by grid lines every quarter.
+pub fn plot(records: &[FrameRecord], budget_ms: f64, jump_frame: usize) -> image::RgbaImage {
+    let (w, h) = (900u32, 520u32);
+    let mut img = image::RgbaImage::from_pixel(w, h, image::Rgba([255, 255, 255, 255]));
+    let n = records.len().max(2);
+    let panel = |top: u32| (top + 10, top + 240);
+    let (err_top, err_bottom) = panel(0);
+    let (time_top, time_bottom) = panel(260);
+    let x_of = |i: usize| 40.0 + (w as f64 - 60.0) * i as f64 / (n - 1) as f64;
+    let pe = records.iter().map(|r| r.pixel_error).fold(0.0, f64::max);
+    let err_max = records
+        .iter()
+        .map(|r| r.max_error_px)
+        .fold(4.0 * pe, f64::max)
+        .max(1e-9);
+    let time_max = records
+        .iter()
+        .map(|r| r.frame_ms)
+        .fold(2.0 * budget_ms, f64::max)
+        .max(1e-9);
+    let y_in = |v: f64, max: f64, top: u32, bottom: u32| {
+        bottom as f64 - (bottom - top) as f64 * (v / max).clamp(0.0, 1.0)
+    };
+    let grey = image::Rgba([200, 200, 200, 255]);
+    for (top, bottom) in [(err_top, err_bottom), (time_top, time_bottom)] {
+        for q in 0..=4 {
+            let y = top as f64 + (bottom - top) as f64 * q as f64 / 4.0;
+            line(&mut img, (40.0, y), (w as f64 - 20.0, y), grey);
+        }
+        line(
+            &mut img,
+            (40.0, top as f64),
+            (40.0, bottom as f64),
+            image::Rgba([0, 0, 0, 255]),
+        );
+    }
+    let series = |img: &mut image::RgbaImage,
+                  f: &dyn Fn(&FrameRecord) -> f64,
+                  max: f64,
+                  (top, bottom): (u32, u32),
+                  color: [u8; 3]| {
+        for pair in records.windows(2) {
+            let a = (x_of(pair[0].frame), y_in(f(&pair[0]), max, top, bottom));
+            let b = (x_of(pair[1].frame), y_in(f(&pair[1]), max, top, bottom));
+            line(img, a, b, image::Rgba([color[0], color[1], color[2], 255]));
+        }
+    };
+    let dark = [110, 110, 110];
+    series(
+        &mut img,
+        &|r| r.pixel_error,
+        err_max,
+        (err_top, err_bottom),
+        dark,
+    );
+    series(
+        &mut img,
+        &|r| r.p99_error_px,
+        err_max,
+        (err_top, err_bottom),
+        [255, 150, 0],
+    );
+    series(
+        &mut img,
+        &|r| r.max_error_px,
+        err_max,
+        (err_top, err_bottom),
+        [220, 0, 0],
+    );
+    series(
+        &mut img,
+        &|_| budget_ms,
+        time_max,
+        (time_top, time_bottom),
+        dark,
+    );
+    series(
+        &mut img,
+        &|r| r.tessellation_ms,
+        time_max,
+        (time_top, time_bottom),
+        [0, 160, 0],
+    );
+    series(
+        &mut img,
+        &|r| r.frame_ms,
+        time_max,
+        (time_top, time_bottom),
+        [0, 70, 220],
+    );
+    let x = x_of(jump_frame);
+    line(
+        &mut img,
+        (x, err_top as f64),
+        (x, time_bottom as f64),
+        image::Rgba([0, 0, 0, 255]),
+    );
+    img
+}
+
+/// A 1-px line (DDA), clipped to the image.
+fn line(img: &mut image::RgbaImage, a: (f64, f64), b: (f64, f64), c: image::Rgba<u8>) {
+    let steps = ((b.0 - a.0).abs().max((b.1 - a.1).abs()).ceil() as usize).max(1);
+    for s in 0..=steps {
+        let t = s as f64 / steps as f64;
+        let (x, y) = (a.0 + (b.0 - a.0) * t, a.1 + (b.1 - a.1) * t);
+        if x >= 0.0 && y >= 0.0 && (x as u32) < img.width() && (y as u32) < img.height() {
+            img.put_pixel(x as u32, y as u32, c);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn record(frame: usize, ms: f64, err: f64) -> FrameRecord {
+        FrameRecord {
+            frame,
+            frame_ms: ms,
+            max_error_px: err,
+            pixel_error: 0.5,
+            ..FrameRecord::default()
+        }
+    }
+
+    #[test]
+    fn convergence_counts_time_from_the_jump() {
+        let r = vec![
+            record(0, 10.0, 0.5),
+            record(1, 10.0, 3.0), // jump
+            record(2, 20.0, 1.0),
+            record(3, 30.0, 0.5),
+            record(4, 10.0, 0.5),
+        ];
+        let s = summarize(&r, 0.0, 1);
+        assert_eq!(s.converge_frames, Some(3));
+        assert_eq!(s.converge_ms, Some(60.0));
+        assert_eq!(s.p99_frame_ms, 30.0);
+        let never = summarize(&r[..3], 0.0, 1);
+        assert_eq!(never.converge_ms, None);
+    }
+
+    #[test]
+    fn csv_rows_have_every_column() {
+        let cols = FrameRecord::CSV_HEADER.split(',').count();
+        let row = FrameRecord {
+            crack_pixels: Some(0),
+            ..record(3, 1.0, 0.2)
+        }
+        .csv_row();
+        assert_eq!(row.split(',').count(), cols);
+        assert!(row.starts_with("3,1.000,"));
+    }
+}

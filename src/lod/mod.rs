@@ -1,0 +1,492 @@
+//! View-dependent level of detail with a load-balanced re-tessellation queue.
+//!
+//! After Balázs, Guthe and Klein, "Fat Borders" (2004), §4.2: per frame, only patches visible
+//! in the previous frame (patch-ID buffer) and inside the frustum are considered; those whose
+//! current tessellation error ε_c is off the error the view now wants, ε_w, go into a priority
+//! queue with weight
+//!
+//! ```text
+//! w = (ε_c / ε_w)²   if ε_c > ε_w   (too coarse: visible error, urgent)
+//! w =  ε_w / ε_c     if ε_c < ε_w   (too fine: only wastes triangles)
+//! ```
+//!
+//! (the paper's ε_act is our current ε_c, its ε_c our wanted ε_w), and are re-tessellated from
+//! the top until the frame's time budget (default 40 ms, as in the paper) is spent, in batches
+//! on rayon workers. Fat borders always use each patch's *current* ε_c, so the picture stays
+//! crack-free while the queue catches up.
+//!
+//! **Levels and hysteresis** (Pajon, "LOD overview", on avoiding flicker between levels):
+//! tessellations are made only at discrete errors ε_k = unit · √2^k, the largest one ≤ ε_w,
+//! so a fresh tessellation has ε_w/√2 < ε_c ≤ ε_w. A patch is too coarse as soon as
+//! ε_c > ε_w, but too fine only once ε_c < ε_w / [`LodOptions::coarsen_factor`] (default 2):
+//! a camera moving back and forth within that band never re-tessellates. Each patch keeps its
+//! last few levels ([`LodOptions::cache_levels`]); going back to a cached level costs nothing.
+//!
+//! **Frame-rate target** (Pajon, after Funkhouser and Séquin's benefit/cost): see
+//! [`PixelErrorController`].
+
+pub mod flythrough;
+
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use rayon::prelude::*;
+
+use crate::model::Scene;
+use crate::tessellate::{PatchMesh, Tessellators};
+use crate::view::View;
+
+/// Ratio between consecutive tessellation levels.
+pub const LEVEL_RATIO: f64 = std::f64::consts::SQRT_2;
+
+/// Queue weight of a patch with current error `current` when the view wants `wanted` (both
+/// object units, > 0): quadratic when too coarse, linear when too fine (module doc).
+pub fn priority(current: f64, wanted: f64) -> f64 {
+    if current > wanted {
+        (current / wanted).powi(2)
+    } else {
+        wanted / current
+    }
+}
+
+/// What a patch at error `current` needs when the view wants `wanted`, with hysteresis
+/// factor `coarsen_factor` (≥ 1).
+pub fn needs_update(current: f64, wanted: f64, coarsen_factor: f64) -> bool {
+    current > wanted || current * coarsen_factor < wanted
+}
+
+/// Tessellation levels of a scene: ε_k = unit · √2^k.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Levels {
+    pub unit: f64,
+}
+
+impl Levels {
+    /// Levels for a scene of bounding-box diagonal `diagonal`: level 0 is 10⁻⁷ of it.
+    pub fn for_diagonal(diagonal: f64) -> Levels {
+        let unit = if diagonal.is_finite() && diagonal > 0.0 {
+            diagonal * 1e-7
+        } else {
+            1e-7
+        };
+        Levels { unit }
+    }
+
+    /// The coarsest level whose error is at most `wanted` (level 0 for anything finer).
+    pub fn level_for(&self, wanted: f64) -> i32 {
+        if wanted.is_nan() || wanted <= self.unit {
+            return 0;
+        }
+        let k = ((wanted / self.unit).ln() / LEVEL_RATIO.ln()).floor() as i32;
+        // Guard the rounding of ln at exact powers.
+        if self.eps(k) > wanted { k - 1 } else { k }
+    }
+
+    pub fn eps(&self, level: i32) -> f64 {
+        self.unit * LEVEL_RATIO.powi(level)
+    }
+}
+
+/// Settings of the frame loop.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LodOptions {
+    /// Screen-space error wanted, pixels.
+    pub pixel_error: f64,
+    /// Time per frame for re-tessellation.
+    pub budget: Duration,
+    /// A patch is re-tessellated coarser only once its error is this factor below the wanted
+    /// one (hysteresis, ≥ 1).
+    pub coarsen_factor: f64,
+    /// Tessellations kept per patch (current one included).
+    pub cache_levels: usize,
+}
+
+impl Default for LodOptions {
+    fn default() -> Self {
+        LodOptions {
+            pixel_error: crate::view::DEFAULT_PIXEL_ERROR,
+            budget: Duration::from_millis(40),
+            coarsen_factor: 2.0,
+            cache_levels: 3,
+        }
+    }
+}
+
+/// Per-patch state.
+#[derive(Clone, Debug, Default)]
+struct PatchLod {
+    /// Current level and tessellation.
+    level: i32,
+    mesh: Arc<PatchMesh>,
+    /// Other tessellations kept, by level.
+    cache: Vec<(i32, Arc<PatchMesh>)>,
+    /// Error the current view wants.
+    wanted: f64,
+    in_frustum: bool,
+    /// Showed in the patch-ID buffer of the last frame drawn.
+    visible: bool,
+}
+
+/// What one [`FrameLoop::update`] did.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct UpdateStats {
+    /// Patches inside the frustum.
+    pub in_frustum: usize,
+    /// Patches queued (visible last frame, off their wanted error).
+    pub queued: usize,
+    /// Patches re-tessellated this frame.
+    pub retessellated: usize,
+    /// Patches switched to a cached level (no tessellation).
+    pub from_cache: usize,
+    /// Queued patches left for later frames.
+    pub queue_left: usize,
+    /// Wall time spent re-tessellating.
+    pub tessellation: Duration,
+    /// Largest and 99th-percentile screen-space error (pixels) over the patches visible last
+    /// frame and in the frustum, after the update.
+    pub max_error_px: f64,
+    pub p99_error_px: f64,
+    /// Triangles of the patches in the frustum.
+    pub triangles: usize,
+}
+
+/// The frame loop's state: every patch's current tessellation, error and visibility.
+#[derive(Debug)]
+pub struct FrameLoop {
+    pub options: LodOptions,
+    levels: Levels,
+    patches: Vec<PatchLod>,
+    /// Measured seconds per re-tessellated patch (running mean), to fit batches in the budget.
+    seconds_per_patch: f64,
+}
+
+impl FrameLoop {
+    /// Tessellates every patch for `view` (no budget: the first frame must show something)
+    /// and marks every patch visible.
+    pub fn new(scene: &Scene, view: &View, options: LodOptions) -> FrameLoop {
+        let levels = Levels::for_diagonal(scene.bbox_diagonal());
+        let patches = scene
+            .patches
+            .par_iter()
+            .map_init(Tessellators::new, |t, patch| {
+                let wanted = view.eps_obj(&patch.bounds, options.pixel_error);
+                let level = levels.level_for(wanted);
+                let mut mesh = PatchMesh::default();
+                t.patch(patch, levels.eps(level), &mut mesh);
+                PatchLod {
+                    level,
+                    mesh: Arc::new(mesh),
+                    cache: Vec::new(),
+                    wanted,
+                    in_frustum: view.sees_sphere(&patch.bounds),
+                    visible: true,
+                }
+            })
+            .collect();
+        FrameLoop {
+            options,
+            levels,
+            patches,
+            seconds_per_patch: 0.0,
+        }
+    }
+
+    /// Records which patches showed in the last frame drawn (indexed like the scene's
+    /// patches, e.g. from [`crate::render::Frame::visible_ids`]).
+    pub fn set_visible(&mut self, visible: &[bool]) {
+        for (p, v) in self.patches.iter_mut().zip(visible) {
+            p.visible = *v;
+        }
+    }
+
+    /// Current error of every patch (object units).
+    pub fn current_eps(&self) -> Vec<f64> {
+        self.patches
+            .iter()
+            .map(|p| self.levels.eps(p.level))
+            .collect()
+    }
+
+    /// The meshes to draw: patches inside the frustum at their current tessellation.
+    pub fn meshes(&self) -> impl Iterator<Item = &PatchMesh> {
+        self.patches
+            .iter()
+            .filter(|p| p.in_frustum)
+            .map(|p| p.mesh.as_ref())
+    }
+
+    /// One frame: culls, queues and re-tessellates within the budget (see module doc).
+    pub fn update(&mut self, scene: &Scene, view: &View) -> UpdateStats {
+        let start = Instant::now();
+        let opts = self.options;
+        let mut stats = UpdateStats::default();
+        let mut queue: Vec<(f64, usize)> = Vec::new();
+        for (i, (p, patch)) in self.patches.iter_mut().zip(&scene.patches).enumerate() {
+            p.in_frustum = view.sees_sphere(&patch.bounds);
+            p.wanted = view.eps_obj(&patch.bounds, opts.pixel_error);
+            if !p.in_frustum {
+                continue;
+            }
+            stats.in_frustum += 1;
+            let current = self.levels.eps(p.level);
+            // (At the finest level there is nothing better to do: not queued.)
+            if p.visible
+                && needs_update(current, p.wanted, opts.coarsen_factor)
+                && self.levels.level_for(p.wanted) != p.level
+            {
+                queue.push((priority(current, p.wanted), i));
+            }
+        }
+        stats.queued = queue.len();
+        queue.sort_by(|a, b| b.0.total_cmp(&a.0));
+        // Cached levels first: free.
+        let levels = self.levels;
+        let mut todo: Vec<(usize, i32)> = Vec::with_capacity(queue.len());
+        for &(_, i) in &queue {
+            let p = &mut self.patches[i];
+            let level = levels.level_for(p.wanted);
+            if let Some(k) = p.cache.iter().position(|(l, _)| *l == level) {
+                let (l, mesh) = p.cache.swap_remove(k);
+                let old = std::mem::replace(&mut p.mesh, mesh);
+                p.cache.push((p.level, old));
+                p.level = l;
+                stats.from_cache += 1;
+            } else {
+                todo.push((i, level));
+            }
+        }
+        // Then tessellate from the top of the queue, a batch per round, within the budget.
+        let threads = rayon::current_num_threads().max(1);
+        let mut next = 0;
+        while next < todo.len() {
+            let elapsed = start.elapsed().as_secs_f64();
+            let left = opts.budget.as_secs_f64() - elapsed;
+            // Batch: what fits in the time left at the measured cost, at least one per worker
+            // on the first round (a frame always makes progress), then nothing past the budget.
+            let fit = if self.seconds_per_patch > 0.0 {
+                (left / self.seconds_per_patch * threads as f64).floor() as usize
+            } else {
+                threads
+            };
+            let batch = if next == 0 {
+                fit.max(1)
+            } else if left <= 0.0 {
+                0
+            } else {
+                fit
+            };
+            if batch == 0 {
+                break;
+            }
+            let end = (next + batch.min(4 * threads)).min(todo.len());
+            let jobs = &todo[next..end];
+            let t0 = Instant::now();
+            let results: Vec<PatchMesh> = jobs
+                .par_iter()
+                .map_init(Tessellators::new, |t, &(i, level)| {
+                    let mut mesh = PatchMesh::default();
+                    t.patch(&scene.patches[i], levels.eps(level), &mut mesh);
+                    mesh
+                })
+                .collect();
+            let dt = t0.elapsed().as_secs_f64();
+            // Cost per patch on one worker: the batch ran on min(jobs, threads) workers.
+            let per = dt * (jobs.len().min(threads) as f64) / jobs.len() as f64;
+            self.seconds_per_patch = if self.seconds_per_patch > 0.0 {
+                0.7 * self.seconds_per_patch + 0.3 * per
+            } else {
+                per
+            };
+            for (&(i, level), mesh) in jobs.iter().zip(results) {
+                let p = &mut self.patches[i];
+                let old = std::mem::replace(&mut p.mesh, Arc::new(mesh));
+                p.cache.push((p.level, old));
+                p.level = level;
+                if p.cache.len() + 1 > opts.cache_levels {
+                    // Evict the cached level farthest from the current one.
+                    if let Some(k) =
+                        (0..p.cache.len()).max_by_key(|&k| (p.cache[k].0 - level).unsigned_abs())
+                    {
+                        p.cache.swap_remove(k);
+                    }
+                }
+                stats.retessellated += 1;
+            }
+            next = end;
+        }
+        stats.queue_left = todo.len() - next;
+        stats.tessellation = start.elapsed();
+        let (max, p99) = self.screen_errors();
+        stats.max_error_px = max;
+        stats.p99_error_px = p99;
+        stats.triangles = self.meshes().map(|m| m.triangles.len()).sum();
+        stats
+    }
+
+    /// Largest and 99th-percentile screen-space error (pixels) over the patches visible in
+    /// the last frame and inside the frustum: pixel error × ε_c / ε_w.
+    pub fn screen_errors(&self) -> (f64, f64) {
+        let mut e: Vec<f64> = self
+            .patches
+            .iter()
+            .filter(|p| p.in_frustum && p.visible && p.wanted > 0.0)
+            .map(|p| self.options.pixel_error * self.levels.eps(p.level) / p.wanted)
+            .collect();
+        if e.is_empty() {
+            return (0.0, 0.0);
+        }
+        e.sort_by(f64::total_cmp);
+        let p99 = e[((e.len() - 1) as f64 * 0.99).round() as usize];
+        (e[e.len() - 1], p99)
+    }
+}
+
+/// Frame-rate target (Pajon §3, after Funkhouser and Séquin): picks the pixel error of the
+/// next frame so that the predicted triangle load fits the target frame time.
+///
+/// Cost model: frame time ≈ a + b · triangles (a, b fitted by exponentially weighted least
+/// squares over the frames seen); triangles of a surface tessellated to ε scale as 1/ε, so
+/// the pixel error that fits is γ' = γ · triangles / triangle_budget, with triangle_budget =
+/// (target − a) / b. γ' is clamped to `[min, max]` and moves at most ×2 per frame.
+#[derive(Clone, Debug)]
+pub struct PixelErrorController {
+    pub target: Duration,
+    pub min: f64,
+    pub max: f64,
+    pixel_error: f64,
+    // Weighted sums for the fit t = a + b n.
+    sw: f64,
+    sn: f64,
+    st: f64,
+    snn: f64,
+    snt: f64,
+}
+
+impl PixelErrorController {
+    pub fn new(target: Duration, min: f64, max: f64) -> Self {
+        PixelErrorController {
+            target,
+            min,
+            max,
+            pixel_error: min,
+            sw: 0.0,
+            sn: 0.0,
+            st: 0.0,
+            snn: 0.0,
+            snt: 0.0,
+        }
+    }
+
+    pub fn pixel_error(&self) -> f64 {
+        self.pixel_error
+    }
+
+    /// Records a frame (its triangles and time) and returns the pixel error for the next one.
+    pub fn observe(&mut self, triangles: usize, frame: Duration) -> f64 {
+        let (n, t) = (triangles as f64, frame.as_secs_f64());
+        let decay = 0.9;
+        self.sw = self.sw * decay + 1.0;
+        self.sn = self.sn * decay + n;
+        self.st = self.st * decay + t;
+        self.snn = self.snn * decay + n * n;
+        self.snt = self.snt * decay + n * t;
+        let var = self.snn * self.sw - self.sn * self.sn;
+        let (a, b) = if var > 1e-9 * self.snn * self.sw && self.sw > 2.0 {
+            let b = (self.snt * self.sw - self.sn * self.st) / var;
+            let a = (self.st - b * self.sn) / self.sw;
+            (a, b)
+        } else {
+            (0.0, t / n.max(1.0))
+        };
+        // A fit with negative or zero slope says nothing about triangles: treat all as cost.
+        let (a, b) = if b > 0.0 && a >= 0.0 {
+            (a, b)
+        } else {
+            (0.0, t / n.max(1.0))
+        };
+        let target = self.target.as_secs_f64();
+        let budget = ((target - a) / b).max(1.0);
+        let wanted = self.pixel_error * n.max(1.0) / budget;
+        self.pixel_error = wanted
+            .clamp(self.pixel_error * 0.5, self.pixel_error * 2.0)
+            .clamp(self.min, self.max);
+        self.pixel_error
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn too_coarse_outranks_too_fine() {
+        // Twice too coarse: 4; twice too fine: 2; on target: 1.
+        assert_eq!(priority(2.0, 1.0), 4.0);
+        assert_eq!(priority(0.5, 1.0), 2.0);
+        assert_eq!(priority(1.0, 1.0), 1.0);
+        // Ordering: any coarse patch beats an equally far-off fine one.
+        for r in [1.1, 1.5, 3.0, 10.0] {
+            assert!(priority(r, 1.0) > priority(1.0 / r, 1.0));
+        }
+        // Monotone in how far off a patch is.
+        assert!(priority(3.0, 1.0) > priority(2.0, 1.0));
+        assert!(priority(0.25, 1.0) > priority(0.5, 1.0));
+    }
+
+    #[test]
+    fn levels_give_the_coarsest_error_within_the_wanted_one() {
+        let l = Levels::for_diagonal(100.0);
+        for wanted in [1e-5, 3e-4, 0.01, 0.5, 1.0, 7.3, 100.0] {
+            let k = l.level_for(wanted);
+            assert!(l.eps(k) <= wanted * (1.0 + 1e-12), "{wanted}: {}", l.eps(k));
+            assert!(l.eps(k + 1) > wanted, "{wanted}");
+        }
+        assert_eq!(l.level_for(0.0), 0);
+        assert_eq!(l.level_for(f64::NAN), 0);
+    }
+
+    #[test]
+    fn hysteresis_keeps_a_level_while_the_view_wobbles() {
+        let l = Levels::for_diagonal(1.0);
+        let f = LodOptions::default().coarsen_factor;
+        // Tessellate for wanted 1e-3, then the wanted error wobbles within the band
+        // [ε_c, 2 ε_c] (a camera moving back and forth by up to 2×).
+        let current = l.eps(l.level_for(1e-3));
+        for r in [1.0, 1.5, 1.99, 1.2, 1.0, 1.8] {
+            assert!(!needs_update(current, r * current, f), "{r}");
+        }
+        // Moving closer by any amount past the level: too coarse at once.
+        assert!(needs_update(current, current * 0.99, f));
+        // Moving away past the band: coarsen.
+        assert!(needs_update(current, current * f * 1.01, f));
+        // Without hysteresis (factor 1) the same wobble would flip levels.
+        let flips = [1e-3, 1.5e-3, 1e-3, 1.5e-3]
+            .windows(2)
+            .filter(|w| {
+                let c = l.eps(l.level_for(w[0]));
+                needs_update(c, w[1], 1.0)
+            })
+            .count();
+        assert!(flips > 0);
+    }
+
+    #[test]
+    fn controller_converges_on_a_linear_cost() {
+        // Cost 2 ms + 1 µs per triangle; triangles = 40 000 / pixel error. Target 12 ms:
+        // 10 000 triangles, pixel error 4.
+        let mut c = PixelErrorController::new(Duration::from_millis(12), 0.5, 64.0);
+        let mut pe = c.pixel_error();
+        for _ in 0..40 {
+            let tris = (40_000.0 / pe) as usize;
+            let t = Duration::from_secs_f64(0.002 + 1e-6 * tris as f64);
+            pe = c.observe(tris, t);
+        }
+        assert!((pe - 4.0).abs() < 0.1, "{pe}");
+        // A cheap scene stays at the finest pixel error.
+        let mut c = PixelErrorController::new(Duration::from_millis(12), 0.5, 64.0);
+        for _ in 0..10 {
+            c.observe(1000, Duration::from_millis(3));
+        }
+        assert_eq!(c.pixel_error(), 0.5);
+    }
+}
