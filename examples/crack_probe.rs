@@ -5,8 +5,10 @@
 //!
 //! `cargo run --release --example crack_probe -- FILE SEED VIEW` (512×384, 0.5 px, fat borders 6)
 
-use patchwork::check::crack::{CHECK_SURFACE, SENTINEL, classify, random_view, reference_meshes};
-use patchwork::render::{FatBorders, RenderOptions, Renderer, Shading};
+use patchwork::check::crack::{
+    SENTINEL, check_render_options, classify, random_view, reference_meshes,
+};
+use patchwork::render::{FatBorders, RenderOptions, Renderer};
 use patchwork::tessellate::{PatchMesh, tessellate_scene};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -25,15 +27,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     let pixel_error = 0.5;
     let mut renderer = Renderer::new()?;
-    let drawn = RenderOptions {
-        shading: Shading::Flat,
-        background: SENTINEL,
-        surface_color: CHECK_SURFACE,
-        fat_borders: FatBorders::Six,
-        msaa: 1,
-        depth: true,
-        ids: false,
-    };
+    let drawn = check_render_options(FatBorders::Six);
     let plain = RenderOptions {
         fat_borders: FatBorders::Off,
         ..drawn

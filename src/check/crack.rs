@@ -423,6 +423,19 @@ impl CheckReport {
     }
 }
 
+/// How checks render: flat shading, the sentinel background, one sample per pixel, depth.
+pub fn check_render_options(fat_borders: FatBorders) -> RenderOptions {
+    RenderOptions {
+        shading: Shading::Flat,
+        background: SENTINEL,
+        surface_color: CHECK_SURFACE,
+        fat_borders,
+        msaa: 1,
+        depth: true,
+        ids: false,
+    }
+}
+
 /// Renders `opts.views` random views of `scene` and counts cracks and growth per variant.
 /// `on_view` is called after each view (progress).
 pub fn run_check(
@@ -432,15 +445,7 @@ pub fn run_check(
     mut on_view: impl FnMut(&ViewResult),
 ) -> Result<CheckReport, RenderError> {
     let mut report = CheckReport::default();
-    let base = RenderOptions {
-        shading: Shading::Flat,
-        background: SENTINEL,
-        surface_color: CHECK_SURFACE,
-        fat_borders: FatBorders::Off,
-        msaa: 1,
-        depth: true,
-        ids: false,
-    };
+    let base = check_render_options(FatBorders::Off);
     for index in 0..opts.views {
         let view = random_view(scene, opts.seed, index, opts.size, opts.fov_y);
         let (ref_meshes, grid) = reference_meshes(scene, &view, opts.pixel_error);

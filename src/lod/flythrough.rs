@@ -5,10 +5,10 @@ use std::time::{Duration, Instant};
 
 use glam::DVec3;
 
-use crate::check::crack::{CHECK_SURFACE, SENTINEL, classify, reference_meshes};
+use crate::check::crack::{SENTINEL, check_render_options, classify, reference_meshes};
 use crate::lod::{FrameLoop, LodOptions, PixelErrorController};
 use crate::model::Scene;
-use crate::render::{FatBorders, RenderError, RenderOptions, Renderer, Shading};
+use crate::render::{FatBorders, RenderError, RenderOptions, Renderer};
 use crate::view::View;
 
 /// Where the camera is at frame `i` of `n`: orbit half a turn (40 % of the frames), zoom in
@@ -138,15 +138,7 @@ pub fn run(
         ids: true,
         ..RenderOptions::default()
     };
-    let check = RenderOptions {
-        shading: Shading::Flat,
-        background: SENTINEL,
-        surface_color: CHECK_SURFACE,
-        fat_borders: FatBorders::Six,
-        msaa: 1,
-        depth: true,
-        ids: false,
-    };
+    let check = check_render_options(FatBorders::Six);
     let mut records = Vec::with_capacity(n);
     for i in 0..n {
         let view = camera_path(scene, i, n, opts.fov_y, opts.size);

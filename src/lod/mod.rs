@@ -347,7 +347,9 @@ impl FrameLoop {
 /// Cost model: frame time ≈ a + b · triangles (a, b fitted by exponentially weighted least
 /// squares over the frames seen); triangles of a surface tessellated to ε scale as 1/ε, so
 /// the pixel error that fits is γ' = γ · triangles / triangle_budget, with triangle_budget =
-/// (target − a) / b. γ' is clamped to `[min, max]` and moves at most ×2 per frame.
+/// max(target − a, target/10) / b. γ' is clamped to `[min, max]` and moves at most ×2 per frame. When the
+/// fit finds no cost per triangle (b ≤ 0: the frame is fill- or overhead-bound), the finest
+/// pixel error is used: coarsening could not buy time.
 #[derive(Clone, Debug)]
 pub struct PixelErrorController {
     pub target: Duration,
@@ -391,22 +393,24 @@ impl PixelErrorController {
         self.snn = self.snn * decay + n * n;
         self.snt = self.snt * decay + n * t;
         let var = self.snn * self.sw - self.sn * self.sn;
-        let (a, b) = if var > 1e-9 * self.snn * self.sw && self.sw > 2.0 {
+        let target = self.target.as_secs_f64();
+        let wanted = if var > 1e-9 * self.snn * self.sw && self.sw > 2.0 {
             let b = (self.snt * self.sw - self.sn * self.st) / var;
             let a = (self.st - b * self.sn) / self.sw;
-            (a, b)
+            if b <= 0.0 {
+                // Triangles do not cost (fill- or overhead-bound, as on a software
+                // rasterizer): coarser tessellation would lose detail for nothing.
+                self.min
+            } else {
+                // If the fixed cost alone exceeds the target, the target cannot be met by
+                // LOD: triangles still get a tenth of it rather than none.
+                let budget = ((target - a).max(0.1 * target) / b).max(1.0);
+                self.pixel_error * n.max(1.0) / budget
+            }
         } else {
-            (0.0, t / n.max(1.0))
+            // Too few frames for a fit: assume the whole frame is triangle cost.
+            self.pixel_error * t / target
         };
-        // A fit with negative or zero slope says nothing about triangles: treat all as cost.
-        let (a, b) = if b > 0.0 && a >= 0.0 {
-            (a, b)
-        } else {
-            (0.0, t / n.max(1.0))
-        };
-        let target = self.target.as_secs_f64();
-        let budget = ((target - a) / b).max(1.0);
-        let wanted = self.pixel_error * n.max(1.0) / budget;
         self.pixel_error = wanted
             .clamp(self.pixel_error * 0.5, self.pixel_error * 2.0)
             .clamp(self.min, self.max);
@@ -482,6 +486,14 @@ mod tests {
             pe = c.observe(tris, t);
         }
         assert!((pe - 4.0).abs() < 0.1, "{pe}");
+        // A frame time that does not depend on triangles (fill-bound) does not coarsen the
+        // picture, even above the target.
+        let mut c = PixelErrorController::new(Duration::from_millis(12), 0.5, 64.0);
+        let mut pe = c.pixel_error();
+        for _ in 0..20 {
+            pe = c.observe((40_000.0 / pe) as usize, Duration::from_millis(30));
+        }
+        assert_eq!(pe, 0.5);
         // A cheap scene stays at the finest pixel error.
         let mut c = PixelErrorController::new(Duration::from_millis(12), 0.5, 64.0);
         for _ in 0..10 {
