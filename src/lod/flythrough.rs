@@ -66,7 +66,8 @@ pub struct FlythroughOptions {
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct FrameRecord {
     pub frame: usize,
-    /// Whole frame: culling, queue, re-tessellation, upload, draw, ID readback.
+    /// Whole frame: culling, queue, re-tessellation, upload (when the drawn meshes changed),
+    /// draw, ID readback.
     pub frame_ms: f64,
     pub tessellation_ms: f64,
     pub retessellated: usize,
@@ -140,11 +141,17 @@ pub fn run(
     };
     let check = check_render_options(FatBorders::Six);
     let mut records = Vec::with_capacity(n);
+    // GPU buffers are rebuilt only when the drawn meshes change.
+    let mut gpu = renderer.upload(lod.meshes());
+    let mut uploaded = lod.generation();
     for i in 0..n {
         let view = camera_path(scene, i, n, opts.fov_y, opts.size);
         let start = Instant::now();
         let stats = lod.update(scene, &view);
-        let gpu = renderer.upload(lod.meshes());
+        if uploaded != lod.generation() {
+            gpu = renderer.upload(lod.meshes());
+            uploaded = lod.generation();
+        }
         let frame = renderer.render(&gpu, &view, &draw)?;
         if let Some(v) = frame.visible_ids(scene.patches.len()) {
             lod.set_visible(&v);

@@ -127,6 +127,24 @@ struct PatchLod {
     visible: bool,
 }
 
+impl PatchLod {
+    /// Makes `mesh` (at `level`) current, keeping the old one in the cache; evicts the cached
+    /// level farthest from the current one past `cache_levels` tessellations in all.
+    fn install(&mut self, level: i32, mesh: Arc<PatchMesh>, cache_levels: usize) {
+        let old = std::mem::replace(&mut self.mesh, mesh);
+        self.cache.push((self.level, old));
+        self.level = level;
+        while self.cache.len() + 1 > cache_levels.max(1) {
+            let Some(k) =
+                (0..self.cache.len()).max_by_key(|&k| (self.cache[k].0 - level).unsigned_abs())
+            else {
+                break;
+            };
+            self.cache.swap_remove(k);
+        }
+    }
+}
+
 /// What one [`FrameLoop::update`] did.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct UpdateStats {
@@ -142,10 +160,6 @@ pub struct UpdateStats {
     pub queue_left: usize,
     /// Wall time spent re-tessellating.
     pub tessellation: Duration,
-    /// Largest and 99th-percentile screen-space error (pixels) over the patches visible last
-    /// frame and in the frustum, after the update.
-    pub max_error_px: f64,
-    pub p99_error_px: f64,
     /// Triangles of the patches in the frustum.
     pub triangles: usize,
 }
@@ -158,6 +172,8 @@ pub struct FrameLoop {
     patches: Vec<PatchLod>,
     /// Measured seconds per re-tessellated patch (running mean), to fit batches in the budget.
     seconds_per_patch: f64,
+    /// Changes whenever the set of meshes to draw changes (re-upload only then).
+    generation: u64,
 }
 
 impl FrameLoop {
@@ -188,6 +204,7 @@ impl FrameLoop {
             levels,
             patches,
             seconds_per_patch: 0.0,
+            generation: 0,
         }
     }
 
@@ -199,12 +216,9 @@ impl FrameLoop {
         }
     }
 
-    /// Current error of every patch (object units).
-    pub fn current_eps(&self) -> Vec<f64> {
-        self.patches
-            .iter()
-            .map(|p| self.levels.eps(p.level))
-            .collect()
+    /// Changes whenever [`FrameLoop::meshes`] would give a different set of meshes.
+    pub fn generation(&self) -> u64 {
+        self.generation
     }
 
     /// The meshes to draw: patches inside the frustum at their current tessellation.
@@ -221,8 +235,11 @@ impl FrameLoop {
         let opts = self.options;
         let mut stats = UpdateStats::default();
         let mut queue: Vec<(f64, usize)> = Vec::new();
+        let mut frustum_changed = false;
         for (i, (p, patch)) in self.patches.iter_mut().zip(&scene.patches).enumerate() {
-            p.in_frustum = view.sees_sphere(&patch.bounds);
+            let in_frustum = view.sees_sphere(&patch.bounds);
+            frustum_changed |= in_frustum != p.in_frustum;
+            p.in_frustum = in_frustum;
             p.wanted = view.eps_obj(&patch.bounds, opts.pixel_error);
             if !p.in_frustum {
                 continue;
@@ -247,9 +264,7 @@ impl FrameLoop {
             let level = levels.level_for(p.wanted);
             if let Some(k) = p.cache.iter().position(|(l, _)| *l == level) {
                 let (l, mesh) = p.cache.swap_remove(k);
-                let old = std::mem::replace(&mut p.mesh, mesh);
-                p.cache.push((p.level, old));
-                p.level = l;
+                p.install(l, mesh, opts.cache_levels);
                 stats.from_cache += 1;
             } else {
                 todo.push((i, level));
@@ -298,27 +313,16 @@ impl FrameLoop {
                 per
             };
             for (&(i, level), mesh) in jobs.iter().zip(results) {
-                let p = &mut self.patches[i];
-                let old = std::mem::replace(&mut p.mesh, Arc::new(mesh));
-                p.cache.push((p.level, old));
-                p.level = level;
-                if p.cache.len() + 1 > opts.cache_levels {
-                    // Evict the cached level farthest from the current one.
-                    if let Some(k) =
-                        (0..p.cache.len()).max_by_key(|&k| (p.cache[k].0 - level).unsigned_abs())
-                    {
-                        p.cache.swap_remove(k);
-                    }
-                }
+                self.patches[i].install(level, Arc::new(mesh), opts.cache_levels);
                 stats.retessellated += 1;
             }
             next = end;
         }
         stats.queue_left = todo.len() - next;
         stats.tessellation = start.elapsed();
-        let (max, p99) = self.screen_errors();
-        stats.max_error_px = max;
-        stats.p99_error_px = p99;
+        if stats.retessellated + stats.from_cache > 0 || frustum_changed {
+            self.generation += 1;
+        }
         stats.triangles = self.meshes().map(|m| m.triangles.len()).sum();
         stats
     }
@@ -472,6 +476,35 @@ mod tests {
             })
             .count();
         assert!(flips > 0);
+    }
+
+    #[test]
+    fn the_cache_keeps_the_levels_nearest_the_current_one() {
+        let mesh = |n: usize| {
+            Arc::new(PatchMesh {
+                triangles: vec![[0, 0, 0]; n],
+                ..PatchMesh::default()
+            })
+        };
+        let mut p = PatchLod {
+            level: 10,
+            mesh: mesh(10),
+            ..PatchLod::default()
+        };
+        for level in [11, 12, 13] {
+            p.install(level, mesh(level as usize), 3);
+        }
+        assert_eq!(p.level, 13);
+        assert_eq!(p.mesh.triangles.len(), 13);
+        let mut cached: Vec<i32> = p.cache.iter().map(|c| c.0).collect();
+        cached.sort();
+        assert_eq!(cached, vec![11, 12]);
+        // Every cached mesh is the one made for its level.
+        assert!(
+            p.cache
+                .iter()
+                .all(|(l, m)| m.triangles.len() == *l as usize)
+        );
     }
 
     #[test]
