@@ -16,3 +16,4 @@ pub mod model;
 pub mod render;
 pub mod tessellate;
 pub mod view;
+pub mod viewer;

@@ -38,6 +38,36 @@ enum Command {
     Export(ExportArgs),
     /// Benchmarks: `--flythrough` drives a recorded camera path through the LOD frame loop.
     Bench(BenchArgs),
+    /// Interactive viewer (needs a display; `xvfb-run -a` gives a virtual one).
+    View(ViewArgs),
+}
+
+#[derive(Args, Debug)]
+struct ViewArgs {
+    /// Model file (.bpt, .step, .stp).
+    file: PathBuf,
+    /// Window size.
+    #[arg(long, default_value = "1024x768", value_parser = parse_size)]
+    size: (u32, u32),
+    /// Vertical field of view in degrees.
+    #[arg(long, default_value_t = view::DEFAULT_FOV_Y_DEG)]
+    fov: f64,
+    /// Pixel error at start (`+`/`-` change it).
+    #[arg(long, default_value_t = view::DEFAULT_PIXEL_ERROR)]
+    pixel_error: f64,
+    /// Re-tessellation time budget per frame, milliseconds.
+    #[arg(long, default_value_t = 40.0)]
+    budget_ms: f64,
+    /// Scripted run: draw this many frames, then exit.
+    #[arg(long)]
+    frames: Option<usize>,
+    /// With --frames: write the last frame here.
+    #[arg(long, requires = "frames")]
+    screenshot: Option<PathBuf>,
+    /// With --frames: keys pressed one per frame from the first, comma-separated
+    /// (e.g. `h,+` or `b,b,w`; names: characters, left, right, up, down, pageup, pagedown).
+    #[arg(long, requires = "frames", value_delimiter = ',')]
+    keys: Vec<String>,
 }
 
 #[derive(Args, Debug)]
@@ -721,6 +751,60 @@ fn cmd_bench(args: &BenchArgs) -> Result<bool, CliError> {
     Ok(crack_free)
 }
 
+fn cmd_view(args: &ViewArgs) -> Result<(), CliError> {
+    use patchwork::viewer::{ViewerOptions, run};
+    check_fov(args.fov)?;
+    check_pixel_error(args.pixel_error)?;
+    if !(args.budget_ms.is_finite() && args.budget_ms > 0.0) {
+        return Err(format!(
+            "--budget-ms must be a positive number, not {}",
+            args.budget_ms
+        )
+        .into());
+    }
+    if args.frames == Some(0) {
+        return Err("--frames must be at least 1".into());
+    }
+    if let Some(k) = args
+        .keys
+        .iter()
+        .find(|k| patchwork::viewer::script_key(k).is_none())
+    {
+        return Err(format!("--keys: unknown key {k:?}").into());
+    }
+    if let Some(n) = args.frames
+        && args.keys.len() > n
+    {
+        return Err(format!("--keys: {} keys for {n} frames", args.keys.len()).into());
+    }
+    let scene = load(&args.file)?;
+    let title = args.file.file_name().map_or_else(
+        || "patchwork".into(),
+        |n| format!("patchwork — {}", n.to_string_lossy()),
+    );
+    let report = run(
+        scene,
+        ViewerOptions {
+            title,
+            size: args.size,
+            fov_y: args.fov.to_radians(),
+            lod: patchwork::lod::LodOptions {
+                pixel_error: args.pixel_error,
+                budget: std::time::Duration::from_secs_f64(args.budget_ms / 1e3),
+                ..patchwork::lod::LodOptions::default()
+            },
+            frames: args.frames,
+            screenshot: args.screenshot.clone(),
+            keys: args.keys.clone(),
+        },
+    )?;
+    eprintln!(
+        "{} frames ({} presented), {:.1} ms per frame on average",
+        report.frames, report.presented, report.mean_frame_ms
+    );
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
@@ -729,6 +813,7 @@ fn main() -> ExitCode {
         Command::Check(a) => cmd_check(a),
         Command::Export(a) => cmd_export(a).map(|()| true),
         Command::Bench(a) => cmd_bench(a),
+        Command::View(a) => cmd_view(a).map(|()| true),
     };
     match result {
         Ok(true) => ExitCode::SUCCESS,

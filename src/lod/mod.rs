@@ -327,6 +327,23 @@ impl FrameLoop {
         stats
     }
 
+    /// Screen-space error of every patch (pixels): pixel error × ε_c / ε_w.
+    pub fn patch_errors_px(&self) -> Vec<f64> {
+        self.patches
+            .iter()
+            .map(|p| self.options.pixel_error * self.levels.eps(p.level) / p.wanted.max(1e-300))
+            .collect()
+    }
+
+    /// As [`FrameLoop::meshes`], with each patch's index in the scene.
+    pub fn meshes_with_index(&self) -> impl Iterator<Item = (usize, &PatchMesh)> {
+        self.patches
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| p.in_frustum)
+            .map(|(i, p)| (i, p.mesh.as_ref()))
+    }
+
     /// Largest and 99th-percentile screen-space error (pixels) over the patches visible in
     /// the last frame and inside the frustum: pixel error × ε_c / ε_w.
     pub fn screen_errors(&self) -> (f64, f64) {

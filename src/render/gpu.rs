@@ -41,22 +41,35 @@ impl Gpu {
     /// Opens the default adapter (honouring `WGPU_BACKEND`, `WGPU_ADAPTER_NAME`, …).
     pub fn new() -> Result<Gpu, RenderError> {
         let desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
-        let backends = format!("{:?}", desc.backends);
         let instance = wgpu::Instance::new(desc);
-        let adapter =
-            pollster::block_on(
-                instance.request_adapter(&wgpu::RequestAdapterOptions {
-                    power_preference: wgpu::PowerPreference::from_env()
-                        .unwrap_or(wgpu::PowerPreference::HighPerformance),
-                    force_fallback_adapter: false,
-                    compatible_surface: None,
-                    apply_limit_buckets: false,
-                }),
-            )
-            .map_err(|e| RenderError::NoAdapter {
-                backends,
-                reason: e.to_string(),
-            })?;
+        let adapter = Self::adapter(&instance, None)?;
+        Self::open(&adapter)
+    }
+
+    /// Picks an adapter of `instance` (able to present to `surface`, if given).
+    pub fn adapter(
+        instance: &wgpu::Instance,
+        surface: Option<&wgpu::Surface<'_>>,
+    ) -> Result<wgpu::Adapter, RenderError> {
+        let backends = format!(
+            "{:?}",
+            wgpu::InstanceDescriptor::new_without_display_handle_from_env().backends
+        );
+        pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference:
+                wgpu::PowerPreference::from_env().unwrap_or(wgpu::PowerPreference::HighPerformance),
+            force_fallback_adapter: false,
+            compatible_surface: surface,
+            apply_limit_buckets: false,
+        }))
+        .map_err(|e| RenderError::NoAdapter {
+            backends,
+            reason: e.to_string(),
+        })
+    }
+
+    /// Opens a device on `adapter`.
+    pub fn open(adapter: &wgpu::Adapter) -> Result<Gpu, RenderError> {
         let info = adapter.get_info();
         let limits = adapter.limits();
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {

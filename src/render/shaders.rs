@@ -17,6 +17,9 @@ pub const FAT_BORDER_TWIN: &str = concat!(
     include_str!("../../shaders/fat_border_twin.wgsl")
 );
 
+/// Copies a read-back frame onto a window surface (the viewer).
+pub const PRESENT: &str = include_str!("../../shaders/present.wgsl");
+
 /// Every composed module with the `shaders/` files it is made of (validated by a test, which
 /// also checks that every file in `shaders/` is used by some module).
 pub const MODULES: &[(&str, &str, &[&str])] = &[
@@ -27,6 +30,7 @@ pub const MODULES: &[(&str, &str, &[&str])] = &[
         FAT_BORDER_TWIN,
         &["fat_border_lib.wgsl", "fat_border_twin.wgsl"],
     ),
+    ("present", PRESENT, &["present.wgsl"]),
 ];
 
 /// Parses and validates a WGSL module with naga; the error names line and column.

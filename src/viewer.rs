@@ -1,0 +1,819 @@
+//! Interactive viewer (`patchwork view FILE`): a winit window driven by the LOD frame loop.
+//!
+//! Every frame: [`FrameLoop::update`] for the camera (re-tessellation within the budget), the
+//! scene drawn by the same [`Renderer`] the headless commands use (offscreen, read back with
+//! the patch-ID buffer that feeds visibility to the next frame), optional overlays (wireframe,
+//! drawn on the CPU with a depth test), then the image copied onto the window's surface by a
+//! one-triangle pass (`shaders/present.wgsl`; GL surfaces accept no copies). On a software
+//! rasterizer the copy is a small part of the frame; images, checks and the window share one
+//! drawing path.
+//!
+//! Mouse: left drag orbits, right drag (or shift + left) pans, wheel zooms. Keys: arrows orbit,
+//! PageUp/PageDown zoom, `f` fit to view, `b` fat borders off/6/4/2, `w` wireframe, `i` patch-ID
+//! colours, `h` error heat map (screen error per patch: blue finer than asked, green on target,
+//! red coarser), `+`/`-` pixel error ×2 / ÷2, `p` screenshot, `q`/Esc quit. The title shows fps,
+//! triangles, queue length and the largest screen error.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use glam::DVec3;
+use thiserror::Error;
+use winit::application::ApplicationHandler;
+use winit::dpi::{PhysicalPosition, PhysicalSize};
+use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
+use winit::keyboard::{Key, NamedKey};
+use winit::window::{Window, WindowId};
+
+use crate::lod::{FrameLoop, LodOptions};
+use crate::model::Scene;
+use crate::render::gpu::Gpu;
+use crate::render::{FatBorders, Frame, RenderError, RenderOptions, Renderer, Shading};
+use crate::tessellate::PatchMesh;
+use crate::view::View;
+
+/// Why the viewer could not run.
+#[derive(Debug, Error)]
+pub enum ViewerError {
+    #[error(
+        "cannot open a window: {0}. The viewer needs a display (X11): set DISPLAY, or run it \
+         under a virtual one, e.g. `xvfb-run -a patchwork view FILE` (apt-get install xvfb)"
+    )]
+    NoDisplay(String),
+    #[error("cannot draw into the window: {0}")]
+    Surface(String),
+    #[error(transparent)]
+    Render(#[from] RenderError),
+    #[error(transparent)]
+    Write(#[from] crate::io::png::WriteError),
+}
+
+/// Settings of a viewer session.
+#[derive(Clone, Debug)]
+pub struct ViewerOptions {
+    pub title: String,
+    pub size: (u32, u32),
+    pub fov_y: f64,
+    pub lod: LodOptions,
+    /// Scripted run: draw this many frames, then exit.
+    pub frames: Option<usize>,
+    /// Written at exit (scripted) or with `p`.
+    pub screenshot: Option<PathBuf>,
+    /// Keys pressed by script, one per frame from the first (names as in [`script_key`]).
+    pub keys: Vec<String>,
+}
+
+/// The key a script name stands for: a character (`b`, `w`, `+`…) or `left`, `right`, `up`,
+/// `down`, `pageup`, `pagedown`, `escape`.
+pub fn script_key(name: &str) -> Option<Key> {
+    Some(match name {
+        "left" => Key::Named(NamedKey::ArrowLeft),
+        "right" => Key::Named(NamedKey::ArrowRight),
+        "up" => Key::Named(NamedKey::ArrowUp),
+        "down" => Key::Named(NamedKey::ArrowDown),
+        "pageup" => Key::Named(NamedKey::PageUp),
+        "pagedown" => Key::Named(NamedKey::PageDown),
+        "escape" => Key::Named(NamedKey::Escape),
+        c if c.chars().count() == 1 => Key::Character(c.into()),
+        _ => return None,
+    })
+}
+
+/// What a session did.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ViewerReport {
+    pub frames: usize,
+    /// Frames that reached the window.
+    pub presented: usize,
+    pub mean_frame_ms: f64,
+}
+
+/// Orbit camera around a target, `up` being the model's up axis.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Orbit {
+    pub target: DVec3,
+    pub distance: f64,
+    /// Angle around `up`, radians.
+    pub yaw: f64,
+    /// Angle above the horizontal plane, radians (kept within ±89°).
+    pub pitch: f64,
+    pub up: DVec3,
+}
+
+impl Orbit {
+    /// The camera of [`View::framing`] (fit to view).
+    pub fn fit(scene: &Scene, fov_y: f64, size: (u32, u32)) -> Orbit {
+        let up = scene.up.vector();
+        let v = View::framing(&scene.bounds, up, fov_y, size);
+        let d = v.eye - v.target;
+        let (x, y) = basis(up);
+        let h = d - up * d.dot(up);
+        Orbit {
+            target: v.target,
+            distance: d.length(),
+            yaw: h.dot(y).atan2(h.dot(x)),
+            pitch: (d.dot(up) / d.length()).clamp(-1.0, 1.0).asin(),
+            up,
+        }
+    }
+
+    pub fn eye(&self) -> DVec3 {
+        let (x, y) = basis(self.up);
+        let dir = (x * self.yaw.cos() + y * self.yaw.sin()) * self.pitch.cos()
+            + self.up * self.pitch.sin();
+        self.target + dir * self.distance
+    }
+
+    pub fn view(&self, scene: &Scene, fov_y: f64, size: (u32, u32)) -> View {
+        View::new(self.eye(), self.target, self.up, fov_y, size, &scene.bounds)
+    }
+
+    pub fn rotate(&mut self, dyaw: f64, dpitch: f64) {
+        let limit = 89f64.to_radians();
+        self.yaw += dyaw;
+        self.pitch = (self.pitch + dpitch).clamp(-limit, limit);
+    }
+
+    /// Moves the target by `(dx, dy)` pixels of a view of height `height` and field `fov_y`.
+    pub fn pan(&mut self, dx: f64, dy: f64, fov_y: f64, height: u32) {
+        let forward = (self.target - self.eye()).normalize();
+        let right = forward.cross(self.up).normalize_or_zero();
+        let up = right.cross(forward);
+        let pixel = self.distance * 2.0 * (fov_y * 0.5).tan() / height.max(1) as f64;
+        self.target += (-right * dx + up * dy) * pixel;
+    }
+
+    /// Multiplies the distance by `factor` (> 0).
+    pub fn zoom(&mut self, factor: f64) {
+        if factor.is_finite() && factor > 0.0 {
+            self.distance = (self.distance * factor).max(1e-9);
+        }
+    }
+}
+
+/// Two unit vectors completing `up` to a right-handed basis.
+fn basis(up: DVec3) -> (DVec3, DVec3) {
+    let a = if up.x.abs() < 0.9 { DVec3::X } else { DVec3::Y };
+    let x = (a - up * a.dot(up)).normalize();
+    (x, up.cross(x))
+}
+
+/// Heat-map colour of a screen error `e` (pixels) for pixel error `asked`: blue when finer
+/// than asked, green on target, yellow to red when coarser (red at 4× the pixel error).
+pub fn heat_color(e: f64, asked: f64) -> [f32; 3] {
+    let r = (e / asked.max(1e-12)).max(1e-12).log2();
+    if r <= 0.0 {
+        let t = (-r / 2.0).min(1.0) as f32; // 1/4 of the asked error → pure blue
+        [0.1, 0.8 * (1.0 - t) + 0.2 * t, 0.2 + 0.8 * t]
+    } else {
+        let t = (r / 2.0).min(1.0) as f32;
+        [0.2 + 0.8 * t, 0.8 * (1.0 - t) + 0.1, 0.1]
+    }
+}
+
+/// Draws the visible edges of `meshes` onto `frame` (dark grey): an edge pixel is drawn where
+/// its depth is within 0.5 % of the depth buffer's (hidden edges stay hidden).
+pub fn draw_wireframe<'a>(
+    frame: &mut Frame,
+    view: &View,
+    meshes: impl IntoIterator<Item = &'a PatchMesh>,
+) {
+    let Some(depth) = frame.depth.clone() else {
+        return;
+    };
+    let (w, h) = (frame.width as usize, frame.height as usize);
+    for m in meshes {
+        let projected: Vec<Option<(f64, f64, f64)>> = m
+            .positions
+            .iter()
+            .map(|p| view.project(p.as_dvec3()))
+            .collect();
+        for t in &m.triangles {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                // Each interior edge is listed twice; draw it once.
+                if a > b && m.triangles.len() > 1 {
+                    continue;
+                }
+                let (Some(pa), Some(pb)) = (projected[a as usize], projected[b as usize]) else {
+                    continue;
+                };
+                let steps = ((pb.0 - pa.0).abs().max((pb.1 - pa.1).abs()).ceil() as usize).max(1);
+                if steps > 4 * (w + h) {
+                    continue;
+                }
+                for s in 0..=steps {
+                    let f = s as f64 / steps as f64;
+                    let (x, y) = (pa.0 + (pb.0 - pa.0) * f, pa.1 + (pb.1 - pa.1) * f);
+                    if x < 0.0 || y < 0.0 || x as usize >= w || y as usize >= h {
+                        continue;
+                    }
+                    let i = y as usize * w + x as usize;
+                    let d = pa.2 + (pb.2 - pa.2) * f;
+                    if (d as f32) <= depth[i] * 1.005 {
+                        frame.color[4 * i..4 * i + 3].copy_from_slice(&[40, 40, 40]);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Opens the window and runs until it is closed (or the scripted frames are drawn).
+pub fn run(scene: Scene, options: ViewerOptions) -> Result<ViewerReport, ViewerError> {
+    let event_loop = EventLoop::new().map_err(|e| ViewerError::NoDisplay(e.to_string()))?;
+    let orbit = Orbit::fit(&scene, options.fov_y, options.size);
+    let mut app = App {
+        scene,
+        options,
+        orbit,
+        state: None,
+        error: None,
+        fat_borders: FatBorders::Six,
+        shading: Shading::Lit,
+        wireframe: false,
+        heat: false,
+        drag: None,
+        cursor: PhysicalPosition::new(0.0, 0.0),
+        shift: false,
+        dirty: true,
+        frames: 0,
+        presented: 0,
+        frame_time: Duration::ZERO,
+        last_title: Instant::now(),
+        shots: 0,
+    };
+    event_loop
+        .run_app(&mut app)
+        .map_err(|e| ViewerError::NoDisplay(e.to_string()))?;
+    if let Some(e) = app.error {
+        return Err(e);
+    }
+    if app.frames > 0 && app.presented == 0 {
+        return Err(ViewerError::Surface(format!(
+            "{} frames drawn, none could be presented to the window",
+            app.frames
+        )));
+    }
+    Ok(ViewerReport {
+        frames: app.frames,
+        presented: app.presented,
+        mean_frame_ms: app.frame_time.as_secs_f64() * 1e3 / app.frames.max(1) as f64,
+    })
+}
+
+struct App {
+    scene: Scene,
+    options: ViewerOptions,
+    orbit: Orbit,
+    state: Option<State>,
+    error: Option<ViewerError>,
+    fat_borders: FatBorders,
+    shading: Shading,
+    wireframe: bool,
+    heat: bool,
+    drag: Option<MouseButton>,
+    cursor: PhysicalPosition<f64>,
+    shift: bool,
+    /// Something changed since the last frame (camera, settings, queue not empty).
+    dirty: bool,
+    frames: usize,
+    presented: usize,
+    frame_time: Duration,
+    last_title: Instant,
+    shots: usize,
+}
+
+struct State {
+    window: Arc<Window>,
+    surface: wgpu::Surface<'static>,
+    config: wgpu::SurfaceConfiguration,
+    renderer: Renderer,
+    present: Present,
+    lod: FrameLoop,
+    gpu_meshes: Option<(u64, crate::render::GpuMeshes)>,
+    last: Option<Frame>,
+}
+
+/// The one-triangle copy of a frame onto the surface.
+struct Present {
+    pipeline: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+    texture_format: wgpu::TextureFormat,
+}
+
+impl Present {
+    fn new(device: &wgpu::Device, surface_format: wgpu::TextureFormat) -> Present {
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("present.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(crate::render::shaders::PRESENT.into()),
+        });
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("present"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
+                },
+                count: None,
+            }],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("present"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("present"),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_present"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: None,
+            multisample: wgpu::MultisampleState::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_present"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: surface_format,
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        // sRGB surface: upload as sRGB so load + store leave the bytes unchanged.
+        let texture_format = if surface_format.is_srgb() {
+            wgpu::TextureFormat::Rgba8UnormSrgb
+        } else {
+            wgpu::TextureFormat::Rgba8Unorm
+        };
+        Present {
+            pipeline,
+            layout,
+            texture_format,
+        }
+    }
+
+    fn draw(&self, gpu: &Gpu, frame: &Frame, target: &wgpu::TextureView) {
+        let size = wgpu::Extent3d {
+            width: frame.width,
+            height: frame.height,
+            depth_or_array_layers: 1,
+        };
+        let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("frame"),
+            size,
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: self.texture_format,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        });
+        gpu.queue.write_texture(
+            texture.as_image_copy(),
+            &frame.color,
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(4 * frame.width),
+                rows_per_image: Some(frame.height),
+            },
+            size,
+        );
+        let view = texture.create_view(&Default::default());
+        let bind = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("present"),
+            layout: &self.layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::TextureView(&view),
+            }],
+        });
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("present"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: target,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: None,
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &bind, &[]);
+            pass.draw(0..3, 0..1);
+        }
+        gpu.queue.submit([encoder.finish()]);
+    }
+}
+
+impl App {
+    fn open(&mut self, event_loop: &ActiveEventLoop) -> Result<State, ViewerError> {
+        let (w, h) = self.options.size;
+        let attrs = Window::default_attributes()
+            .with_title(self.options.title.clone())
+            .with_inner_size(PhysicalSize::new(w, h));
+        let window = Arc::new(
+            event_loop
+                .create_window(attrs)
+                .map_err(|e| ViewerError::NoDisplay(e.to_string()))?,
+        );
+        let desc = wgpu::InstanceDescriptor::new_with_display_handle_from_env(Box::new(
+            event_loop.owned_display_handle(),
+        ));
+        let instance = wgpu::Instance::new(desc);
+        let surface = instance
+            .create_surface(window.clone())
+            .map_err(|e| ViewerError::Surface(e.to_string()))?;
+        let adapter = Gpu::adapter(&instance, Some(&surface))?;
+        let caps = surface.get_capabilities(&adapter);
+        let format = caps
+            .formats
+            .iter()
+            .copied()
+            .find(|f| {
+                matches!(
+                    f,
+                    wgpu::TextureFormat::Rgba8Unorm
+                        | wgpu::TextureFormat::Rgba8UnormSrgb
+                        | wgpu::TextureFormat::Bgra8Unorm
+                        | wgpu::TextureFormat::Bgra8UnormSrgb
+                )
+            })
+            .ok_or_else(|| {
+                ViewerError::Surface(format!("no 8-bit RGBA format among {:?}", caps.formats))
+            })?;
+        let gpu = Gpu::open(&adapter)?;
+        let size = window.inner_size();
+        let mut config = surface
+            .get_default_config(&adapter, size.width.max(1), size.height.max(1))
+            .ok_or_else(|| {
+                ViewerError::Surface("the adapter cannot present to this window".into())
+            })?;
+        config.format = format;
+        config.usage = wgpu::TextureUsages::RENDER_ATTACHMENT;
+        config.present_mode = wgpu::PresentMode::AutoVsync;
+        config.view_formats.clear();
+        surface.configure(&gpu.device, &config);
+        let present = Present::new(&gpu.device, format);
+        let renderer = Renderer::with_gpu(gpu)?;
+        eprintln!("adapter: {}", renderer.gpu().describe());
+        let view = self.view(config.width, config.height);
+        let lod = FrameLoop::new(&self.scene, &view, self.options.lod);
+        Ok(State {
+            window,
+            surface,
+            config,
+            renderer,
+            present,
+            lod,
+            gpu_meshes: None,
+            last: None,
+        })
+    }
+
+    fn view(&self, w: u32, h: u32) -> View {
+        self.orbit
+            .view(&self.scene, self.options.fov_y, (w.max(1), h.max(1)))
+    }
+
+    /// One frame; returns whether the queue still has work.
+    fn frame(&mut self) -> Result<bool, ViewerError> {
+        let Some(state) = self.state.as_mut() else {
+            return Ok(false);
+        };
+        let (w, h) = (state.config.width, state.config.height);
+        let view = self
+            .orbit
+            .view(&self.scene, self.options.fov_y, (w.max(1), h.max(1)));
+        let start = Instant::now();
+        let stats = state.lod.update(&self.scene, &view);
+        let generation = state.lod.generation();
+        if self.heat || state.gpu_meshes.as_ref().is_none_or(|g| g.0 != generation) {
+            let asked = state.lod.options.pixel_error;
+            let meshes = if self.heat {
+                let errors = state.lod.patch_errors_px();
+                state
+                    .lod
+                    .meshes_with_index()
+                    .map(|(i, m)| PatchMesh {
+                        color: Some(heat_color(errors[i], asked)),
+                        ..m.clone()
+                    })
+                    .collect::<Vec<_>>()
+            } else {
+                state.lod.meshes().cloned().collect()
+            };
+            let gen_key = if self.heat { u64::MAX } else { generation };
+            state.gpu_meshes = Some((gen_key, state.renderer.upload(&meshes)));
+        }
+        let Some((_, gpu_meshes)) = state.gpu_meshes.as_ref() else {
+            return Ok(false);
+        };
+        let opts = RenderOptions {
+            shading: if self.heat {
+                Shading::Lit
+            } else {
+                self.shading
+            },
+            fat_borders: self.fat_borders,
+            msaa: 1,
+            depth: self.wireframe,
+            ids: true,
+            ..RenderOptions::default()
+        };
+        let mut frame = state.renderer.render(gpu_meshes, &view, &opts)?;
+        if let Some(v) = frame.visible_ids(self.scene.patches.len()) {
+            state.lod.set_visible(&v);
+        }
+        if self.wireframe {
+            draw_wireframe(&mut frame, &view, state.lod.meshes());
+        }
+        match state.surface.get_current_texture() {
+            wgpu::CurrentSurfaceTexture::Success(t)
+            | wgpu::CurrentSurfaceTexture::Suboptimal(t) => {
+                let target = t.texture.create_view(&Default::default());
+                state.present.draw(state.renderer.gpu(), &frame, &target);
+                state.window.pre_present_notify();
+                state.renderer.gpu().queue.present(t);
+                self.presented += 1;
+            }
+            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
+                state
+                    .surface
+                    .configure(&state.renderer.gpu().device, &state.config);
+            }
+            _ => {}
+        }
+        let dt = start.elapsed();
+        self.frames += 1;
+        self.frame_time += dt;
+        if self.last_title.elapsed() > Duration::from_millis(250) || self.options.frames.is_some() {
+            let (max, _) = state.lod.screen_errors();
+            state.window.set_title(&format!(
+                "{} — {:.1} fps, {} triangles, queue {}, max error {:.2} px, pixel error {}, fat borders {}",
+                self.options.title,
+                1.0 / dt.as_secs_f64().max(1e-6),
+                stats.triangles,
+                stats.queue_left,
+                max,
+                state.lod.options.pixel_error,
+                self.fat_borders.name()
+            ));
+            self.last_title = Instant::now();
+        }
+        state.last = Some(frame);
+        Ok(stats.queue_left > 0 || stats.retessellated > 0)
+    }
+
+    fn screenshot(&mut self) -> Result<(), ViewerError> {
+        let Some(frame) = self.state.as_ref().and_then(|s| s.last.as_ref()) else {
+            return Ok(());
+        };
+        let path = match &self.options.screenshot {
+            Some(p) if self.options.frames.is_some() => p.clone(),
+            _ => {
+                self.shots += 1;
+                PathBuf::from(format!("patchwork-screenshot-{}.png", self.shots))
+            }
+        };
+        crate::io::png::write_rgba(&path, &frame.to_rgba_image())?;
+        eprintln!("wrote {}", path.display());
+        Ok(())
+    }
+
+    fn key(&mut self, key: Key, event_loop: &ActiveEventLoop) {
+        let step = 10f64.to_radians();
+        match key.as_ref() {
+            Key::Named(NamedKey::ArrowLeft) => self.orbit.rotate(-step, 0.0),
+            Key::Named(NamedKey::ArrowRight) => self.orbit.rotate(step, 0.0),
+            Key::Named(NamedKey::ArrowUp) => self.orbit.rotate(0.0, step),
+            Key::Named(NamedKey::ArrowDown) => self.orbit.rotate(0.0, -step),
+            Key::Named(NamedKey::PageUp) => self.orbit.zoom(0.8),
+            Key::Named(NamedKey::PageDown) => self.orbit.zoom(1.25),
+            Key::Named(NamedKey::Escape) | Key::Character("q") => event_loop.exit(),
+            Key::Character("f") => {
+                let size = self
+                    .state
+                    .as_ref()
+                    .map_or(self.options.size, |s| (s.config.width, s.config.height));
+                self.orbit = Orbit::fit(&self.scene, self.options.fov_y, size);
+            }
+            Key::Character("b") => {
+                self.fat_borders = match self.fat_borders {
+                    FatBorders::Off => FatBorders::Six,
+                    FatBorders::Six => FatBorders::Four,
+                    FatBorders::Four => FatBorders::Two,
+                    FatBorders::Two => FatBorders::Off,
+                }
+            }
+            Key::Character("w") => self.wireframe = !self.wireframe,
+            Key::Character("i") => {
+                self.shading = if self.shading == Shading::Ids {
+                    Shading::Lit
+                } else {
+                    Shading::Ids
+                }
+            }
+            Key::Character("h") => {
+                self.heat = !self.heat;
+                if let Some(s) = self.state.as_mut() {
+                    s.gpu_meshes = None;
+                }
+            }
+            Key::Character("+") | Key::Character("=") => self.scale_pixel_error(2.0),
+            Key::Character("-") => self.scale_pixel_error(0.5),
+            Key::Character("p") => {
+                if let Err(e) = self.screenshot() {
+                    eprintln!("error: {e}");
+                }
+            }
+            _ => return,
+        }
+        self.dirty = true;
+    }
+
+    fn scale_pixel_error(&mut self, factor: f64) {
+        if let Some(s) = self.state.as_mut() {
+            let pe = &mut s.lod.options.pixel_error;
+            *pe = (*pe * factor).clamp(0.125, 64.0);
+        }
+    }
+
+    fn fail(&mut self, event_loop: &ActiveEventLoop, e: ViewerError) {
+        self.error = Some(e);
+        event_loop.exit();
+    }
+}
+
+impl ApplicationHandler for App {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.state.is_some() {
+            return;
+        }
+        match self.open(event_loop) {
+            Ok(s) => {
+                s.window.request_redraw();
+                self.state = Some(s);
+            }
+            Err(e) => self.fail(event_loop, e),
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
+        match event {
+            WindowEvent::CloseRequested => event_loop.exit(),
+            WindowEvent::Resized(size) => {
+                if let Some(s) = self.state.as_mut()
+                    && size.width > 0
+                    && size.height > 0
+                {
+                    s.config.width = size.width;
+                    s.config.height = size.height;
+                    s.surface.configure(&s.renderer.gpu().device, &s.config);
+                    self.dirty = true;
+                }
+            }
+            WindowEvent::ModifiersChanged(m) => self.shift = m.state().shift_key(),
+            WindowEvent::KeyboardInput { event, .. } if event.state == ElementState::Pressed => {
+                self.key(event.logical_key, event_loop)
+            }
+            WindowEvent::MouseInput { state, button, .. } => {
+                self.drag = (state == ElementState::Pressed).then_some(button);
+            }
+            WindowEvent::CursorMoved { position, .. } => {
+                let (dx, dy) = (position.x - self.cursor.x, position.y - self.cursor.y);
+                self.cursor = position;
+                let height = self.state.as_ref().map_or(1, |s| s.config.height);
+                match self.drag {
+                    Some(MouseButton::Left) if !self.shift => {
+                        self.orbit.rotate(-dx * 0.01, dy * 0.01);
+                        self.dirty = true;
+                    }
+                    Some(MouseButton::Left) | Some(MouseButton::Right) => {
+                        self.orbit.pan(dx, dy, self.options.fov_y, height);
+                        self.dirty = true;
+                    }
+                    _ => {}
+                }
+            }
+            WindowEvent::MouseWheel { delta, .. } => {
+                let lines = match delta {
+                    MouseScrollDelta::LineDelta(_, y) => y as f64,
+                    MouseScrollDelta::PixelDelta(p) => p.y / 40.0,
+                };
+                self.orbit.zoom(0.9f64.powf(lines));
+                self.dirty = true;
+            }
+            WindowEvent::RedrawRequested => {
+                if let Some(name) = self.options.keys.get(self.frames).cloned() {
+                    match script_key(&name) {
+                        Some(k) => self.key(k, event_loop),
+                        None => {
+                            let why = format!("unknown key {name:?} in the script");
+                            return self.fail(event_loop, ViewerError::Surface(why));
+                        }
+                    }
+                }
+                self.dirty = false;
+                match self.frame() {
+                    Ok(busy) => self.dirty |= busy,
+                    Err(e) => return self.fail(event_loop, e),
+                }
+                if let Some(n) = self.options.frames
+                    && self.frames >= n
+                {
+                    if let Err(e) = self.screenshot() {
+                        return self.fail(event_loop, e);
+                    }
+                    event_loop.exit();
+                }
+            }
+            _ => {}
+        }
+    }
+
+    fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
+        // Scripted runs draw back to back; interactive ones only while something changes or
+        // the queue has work.
+        if self.dirty || self.options.frames.is_some() {
+            if let Some(s) = self.state.as_ref() {
+                s.window.request_redraw();
+            }
+            event_loop.set_control_flow(ControlFlow::Poll);
+        } else {
+            event_loop.set_control_flow(ControlFlow::Wait);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::Sphere;
+
+    fn scene() -> Scene {
+        let mut s = Scene::from_bezier(Vec::new(), crate::model::UpAxis::Z);
+        s.bounds = Sphere {
+            center: DVec3::new(1.0, 2.0, 3.0),
+            radius: 2.0,
+        };
+        s
+    }
+
+    #[test]
+    fn orbit_fit_reproduces_the_framing_view() {
+        let s = scene();
+        let fov = 45f64.to_radians();
+        let o = Orbit::fit(&s, fov, (640, 480));
+        let v = View::framing(&s.bounds, s.up.vector(), fov, (640, 480));
+        assert!(o.eye().distance(v.eye) < 1e-9, "{} vs {}", o.eye(), v.eye);
+    }
+
+    #[test]
+    fn orbit_rotation_keeps_distance_and_clamps_pitch() {
+        let mut o = Orbit::fit(&scene(), 45f64.to_radians(), (640, 480));
+        let d = o.distance;
+        o.rotate(1.0, 10.0);
+        assert!((o.eye().distance(o.target) - d).abs() < 1e-9);
+        assert!(o.pitch <= 89f64.to_radians() + 1e-12);
+        o.zoom(0.5);
+        assert!((o.eye().distance(o.target) - d * 0.5).abs() < 1e-9);
+        // Panning by a view's height moves the target by the height of the view there.
+        let t = o.target;
+        o.pan(0.0, 480.0, 45f64.to_radians(), 480);
+        let moved = o.target.distance(t);
+        let expected = o.distance * 2.0 * (22.5f64.to_radians()).tan();
+        assert!((moved - expected).abs() < 1e-9, "{moved} vs {expected}");
+    }
+
+    #[test]
+    fn heat_colors_run_blue_green_red() {
+        let fine = heat_color(0.125, 0.5);
+        let on = heat_color(0.5, 0.5);
+        let coarse = heat_color(2.0, 0.5);
+        assert!(fine[2] > fine[0] && fine[2] > fine[1]);
+        assert!(on[1] > on[0] && on[1] > on[2]);
+        assert!(coarse[0] > coarse[1] && coarse[0] > coarse[2]);
+    }
+}

@@ -1,0 +1,271 @@
+//! The interactive viewer for real: a window on an X display (a private Xvfb when DISPLAY is
+//! not set), scripted frames and keys, the last frame compared with a golden, and the window's
+//! pixels read back from the X server (`xwd`) to prove the frame reaches the screen. Needs
+//! `xvfb` and `x11-apps` (`.ci/run` installs them); without them these tests fail and say so.
+
+mod common;
+
+use std::io::BufRead;
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+
+use patchwork::check::golden::{GoldenOutcome, Thresholds, compare_with_golden};
+
+/// A display for the viewer: DISPLAY if set, else a private Xvfb killed on drop.
+struct Display {
+    name: String,
+    server: Option<Child>,
+}
+
+impl Display {
+    fn open() -> Display {
+        if let Ok(d) = std::env::var("DISPLAY")
+            && !d.is_empty()
+        {
+            return Display {
+                name: d,
+                server: None,
+            };
+        }
+        // Xvfb picks a free display number and writes it to fd 1.
+        let mut server = Command::new("Xvfb")
+            .args([
+                "-displayfd",
+                "1",
+                "-screen",
+                "0",
+                "1280x1024x24",
+                "-nolisten",
+                "tcp",
+            ])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap_or_else(|e| {
+                panic!(
+                    "the viewer test needs an X display and found neither DISPLAY nor Xvfb \
+                     ({e}): apt-get install -y xvfb"
+                )
+            });
+        let mut line = String::new();
+        let stdout = server.stdout.take().expect("piped");
+        std::io::BufReader::new(stdout)
+            .read_line(&mut line)
+            .expect("Xvfb reports its display");
+        let n = line.trim();
+        assert!(!n.is_empty(), "Xvfb did not start");
+        Display {
+            name: format!(":{n}"),
+            server: Some(server),
+        }
+    }
+}
+
+impl Drop for Display {
+    fn drop(&mut self) {
+        if let Some(s) = self.server.as_mut() {
+            let _ = s.kill();
+            let _ = s.wait();
+        }
+    }
+}
+
+/// Runs `patchwork view` on the teapot for `frames` frames with `keys`, returns the last frame.
+fn view(display: &Display, name: &str, frames: usize, keys: &str) -> image::RgbaImage {
+    let out = common::scratch("viewer").join(format!("{name}.png"));
+    let _ = std::fs::remove_file(&out);
+    let model = common::root().join("models/teapot.bpt");
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_patchwork"));
+    cmd.arg("view")
+        .arg(&model)
+        .args(["--size", "400x300", "--frames", &frames.to_string()])
+        .arg("--screenshot")
+        .arg(&out)
+        .env("DISPLAY", &display.name)
+        .env_remove("WAYLAND_DISPLAY");
+    if !keys.is_empty() {
+        cmd.args(["--keys", keys]);
+    }
+    let result = cmd.output().expect("patchwork runs");
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(result.status.success(), "viewer failed: {stderr}");
+    // Every frame reached the window.
+    assert!(
+        stderr.contains(&format!("{frames} frames ({frames} presented)")),
+        "{stderr}"
+    );
+    image::open(&out).expect("screenshot written").to_rgba8()
+}
+
+fn surface_pixels(img: &image::RgbaImage) -> impl Iterator<Item = [u8; 3]> + '_ {
+    img.pixels()
+        .map(|p| [p.0[0], p.0[1], p.0[2]])
+        .filter(|c| *c != [255, 255, 255])
+}
+
+#[test]
+fn scripted_frames_match_the_golden() {
+    let display = Display::open();
+    let img = view(&display, "teapot", 8, "");
+    let golden = common::root().join("golden/viewer-teapot.png");
+    match compare_with_golden(&golden, &img, Thresholds::default()) {
+        Ok(GoldenOutcome::Matched(score)) => eprintln!("viewer: {score:?}"),
+        Ok(GoldenOutcome::Updated) => eprintln!("viewer: golden rewritten (GOLDEN_UPDATE=1)"),
+        Err(e) => panic!("{e}"),
+    }
+}
+
+#[test]
+fn keys_switch_the_heat_map_and_patch_ids() {
+    let display = Display::open();
+    // Heat map after the queue has settled: every visible patch on target (green).
+    let heat = view(&display, "heat", 6, "h");
+    let (mut green, mut all) = (0, 0);
+    for c in surface_pixels(&heat) {
+        all += 1;
+        if c[1] > c[0] && c[1] > c[2] {
+            green += 1;
+        }
+    }
+    assert!(all > 10_000, "the teapot covers the view: {all}");
+    assert!(
+        green * 100 >= all * 95,
+        "{green} of {all} surface pixels green"
+    );
+    // Patch-ID colours: many distinct colours, none of them the lit grey.
+    let ids = view(&display, "ids", 3, "i");
+    let colours: std::collections::BTreeSet<[u8; 3]> = surface_pixels(&ids).collect();
+    assert!(colours.len() >= 20, "{} colours", colours.len());
+}
+
+/// The X server's root window as RGB rows, read with `xwd` (ZPixmap, 24/32 bits per pixel).
+fn capture_root(display: &Display) -> Option<(usize, usize, Vec<[u8; 3]>)> {
+    let out = Command::new("xwd")
+        .args(["-root", "-silent", "-display", &display.name])
+        .output()
+        .unwrap_or_else(|e| {
+            panic!("reading the screen needs xwd ({e}): apt-get install -y x11-apps")
+        });
+    if !out.status.success() {
+        return None;
+    }
+    let b = out.stdout;
+    let u32_at = |i: usize| -> Option<u32> {
+        let s = b.get(4 * i..4 * i + 4)?;
+        Some(u32::from_be_bytes([s[0], s[1], s[2], s[3]]))
+    };
+    let header = u32_at(0)? as usize;
+    let (format, width, height) = (u32_at(2)?, u32_at(4)? as usize, u32_at(5)? as usize);
+    let (byte_order, bpp, line) = (u32_at(7)?, u32_at(11)?, u32_at(12)? as usize);
+    let masks = [u32_at(14)?, u32_at(15)?, u32_at(16)?];
+    let ncolors = u32_at(19)? as usize;
+    assert_eq!(format, 2, "xwd: not a ZPixmap");
+    assert!(bpp == 32 || bpp == 24, "xwd: {bpp} bits per pixel");
+    let data = b.get(header + 12 * ncolors..)?;
+    let step = bpp as usize / 8;
+    let mut pixels = Vec::with_capacity(width * height);
+    for y in 0..height {
+        for x in 0..width {
+            let o = y * line + x * step;
+            let p = data.get(o..o + step)?;
+            let mut v = [0u8; 4];
+            v[..step].copy_from_slice(p);
+            let v = if byte_order == 0 {
+                u32::from_le_bytes(v)
+            } else {
+                u32::from_be_bytes(v) >> (8 * (4 - step))
+            };
+            let channel = |m: u32| ((v & m) >> m.trailing_zeros()) as u8;
+            pixels.push([channel(masks[0]), channel(masks[1]), channel(masks[2])]);
+        }
+    }
+    Some((width, height, pixels))
+}
+
+#[test]
+fn the_window_shows_the_frame() {
+    let display = Display::open();
+    let out = common::scratch("viewer").join("window.png");
+    let _ = std::fs::remove_file(&out);
+    // Enough frames to keep the window open while the screen is read; the camera is still,
+    // so after the first frames every frame is the same picture.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_patchwork"))
+        .arg("view")
+        .arg(common::root().join("models/teapot.bpt"))
+        .args(["--size", "400x300", "--frames", "400", "--keys", "h"])
+        .arg("--screenshot")
+        .arg(&out)
+        .env("DISPLAY", &display.name)
+        .env_remove("WAYLAND_DISPLAY")
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("patchwork runs");
+    // Wait until the heat-map teapot (green) shows at the top left (no window manager on
+    // Xvfb: the window sits at the origin).
+    let start = std::time::Instant::now();
+    let mut screen = None;
+    while start.elapsed() < std::time::Duration::from_secs(30) {
+        std::thread::sleep(std::time::Duration::from_millis(300));
+        if let Some((w, h, px)) = capture_root(&display)
+            && w >= 400
+            && h >= 300
+        {
+            let green = (0..300)
+                .flat_map(|y| (0..400).map(move |x| (x, y)))
+                .filter(|&(x, y)| {
+                    let c = px[y * w + x];
+                    c[1] > 100 && c[1] > c[0] + 40 && c[1] > c[2] + 40
+                })
+                .count();
+            if green > 5_000 {
+                screen = Some((w, px));
+                break;
+            }
+        }
+    }
+    let status = child.wait().expect("viewer exits");
+    assert!(status.success());
+    let (w, px) = screen.expect("the teapot never showed in the window");
+    // The window's pixels are the frame the viewer drew (its last frame, written at exit).
+    let shot = image::open(&out).expect("screenshot").to_rgba8();
+    let mut differ = 0;
+    for y in 0..300 {
+        for x in 0..400 {
+            let a = px[y * w + x];
+            let b = shot.get_pixel(x as u32, y as u32).0;
+            if (0..3).any(|k| (a[k] as i32 - b[k] as i32).abs() > 2) {
+                differ += 1;
+            }
+        }
+    }
+    if differ * 1000 > 400 * 300 {
+        let mut img = image::RgbImage::new(400, 300);
+        for (x, y, p) in img.enumerate_pixels_mut() {
+            p.0 = px[y as usize * w + x as usize];
+        }
+        let saved = common::scratch("viewer").join("window-actual.png");
+        img.save(&saved).expect("scratch is writable");
+        panic!(
+            "{differ} of 120000 pixels differ between the window ({}) and the frame ({})",
+            saved.display(),
+            out.display()
+        );
+    }
+}
+
+#[test]
+fn without_a_display_the_viewer_says_what_to_do() {
+    let model = common::root().join("models/teapot.bpt");
+    let result = Command::new(env!("CARGO_BIN_EXE_patchwork"))
+        .arg("view")
+        .arg(Path::new(&model))
+        .args(["--frames", "1"])
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .env_remove("WAYLAND_SOCKET")
+        .output()
+        .expect("patchwork runs");
+    assert_eq!(result.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(stderr.contains("xvfb"), "{stderr}");
+}
