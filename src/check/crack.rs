@@ -75,11 +75,12 @@ impl CrackCounts {
 /// uniform grid fine enough for every patch (returned as the grid size). Trimmed faces: every
 /// face at the smallest ε of the view (× [`REFERENCE_EPS_FRACTION`]) with border polylines
 /// that depend only on the curve and ε, so that shared edges get the same points (grid size 0).
+/// Mesh patches: the full-resolution mesh (exact; neighbours share their border vertices).
 pub fn reference_meshes(scene: &Scene, view: &View, pixel_error: f64) -> (Vec<PatchMesh>, u32) {
     let trimmed = scene
         .patches
         .iter()
-        .any(|p| matches!(p.surface, PatchSurface::Trimmed(_)));
+        .any(|p| !matches!(p.surface, PatchSurface::Bezier(_)));
     let mut n = 0;
     let mut meshes = if trimmed {
         let eps = scene
@@ -96,7 +97,7 @@ pub fn reference_meshes(scene: &Scene, view: &View, pixel_error: f64) -> (Vec<Pa
                 let eps = view.eps_obj(&p.bounds, pixel_error) * REFERENCE_EPS_FRACTION;
                 let r = match &p.surface {
                     PatchSurface::Bezier(b) => BezierTessellator::resolution_for(b, eps).0,
-                    PatchSurface::Trimmed(_) => Resolution { nu: 1, nv: 1 },
+                    PatchSurface::Trimmed(_) | PatchSurface::Mesh(_) => Resolution { nu: 1, nv: 1 },
                 };
                 r.nu.max(r.nv)
             })

@@ -14,6 +14,7 @@
 
 pub mod bpt;
 pub mod gltf_out;
+pub mod mesh;
 pub mod png;
 pub mod step;
 
@@ -82,7 +83,7 @@ pub enum LoadError {
 
     /// No reader for this file extension (`extension` is empty when there is none).
     #[error(
-        "{}: unsupported model format {extension:?} (patchwork reads .bpt, .step and .stp files)",
+        "{}: unsupported model format {extension:?} (patchwork reads .bpt, .step, .stp, .glb, .gltf and .obj files)",
         .path.display()
     )]
     UnsupportedFormat { path: PathBuf, extension: String },
@@ -113,6 +114,9 @@ impl LoadError {
     }
 }
 
+/// Triangles per patch when a mesh is split into patches (the 1–2 k).
+pub const DEFAULT_PATCH_TRIANGLES: usize = 1500;
+
 /// Loads a model, choosing the reader by the file's extension (case-insensitive).
 ///
 /// `.bpt` files (Newell's teaset format, z-up) give a scene with [`UpAxis::Z`]; any other
@@ -131,6 +135,16 @@ pub fn load(path: &Path) -> Result<Scene, LoadError> {
             source,
         })?;
         step::parse(&bytes, path)
+    } else if ["glb", "gltf", "obj"]
+        .iter()
+        .any(|e| extension.eq_ignore_ascii_case(e))
+    {
+        let mesh = if extension.eq_ignore_ascii_case("obj") {
+            mesh::read_obj(path)?
+        } else {
+            mesh::read_gltf(path)?
+        };
+        Ok(Scene::from_mesh(mesh, DEFAULT_PATCH_TRIANGLES, UpAxis::Y))
     } else {
         Err(LoadError::UnsupportedFormat {
             path: path.to_path_buf(),

@@ -4,6 +4,7 @@
 //! [`crate::tessellate::PatchMesh`] for a view, `render` draws those.
 
 pub mod bezier;
+pub mod mesh;
 pub mod trimmed;
 
 use std::sync::Arc;
@@ -77,6 +78,8 @@ pub enum PatchSurface {
     Bezier(BezierPatch),
     /// A trimmed face, shared by every placed instance of its part.
     Trimmed(Arc<TrimmedFace>),
+    /// A patch of a triangle mesh (world coordinates).
+    Mesh(Arc<mesh::MeshPatch>),
 }
 
 /// One independently tessellated surface piece.
@@ -189,6 +192,43 @@ impl Scene {
             }],
             skipped: Vec::new(),
             warnings: Vec::new(),
+        }
+    }
+
+    /// Builds a scene from a triangle mesh: welded, split into patches of about
+    /// `patch_triangles` triangles ([`mesh::partition`]).
+    pub fn from_mesh(mut m: mesh::TriMesh, patch_triangles: usize, up: UpAxis) -> Scene {
+        let dropped = m.weld();
+        let mut warnings = Vec::new();
+        if dropped > 0 {
+            warnings.push(format!(
+                "{dropped} degenerate triangles dropped after welding"
+            ));
+        }
+        let bbox = box_of(m.positions.iter().map(|p| p.as_dvec3())).unwrap_or_default();
+        let patches: Vec<Patch> = mesh::partition(&m, patch_triangles)
+            .into_iter()
+            .enumerate()
+            .map(|(i, p)| Patch {
+                id: i as u32,
+                bounds: Sphere::around(p.positions.iter().map(|v| v.as_dvec3())),
+                surface: PatchSurface::Mesh(Arc::new(p)),
+                transform: DMat4::IDENTITY,
+                part: 0,
+                color: None,
+            })
+            .collect();
+        let spheres: Vec<Sphere> = patches.iter().map(|p| p.bounds).collect();
+        Scene {
+            bounds: Sphere::union(&spheres),
+            patches,
+            up,
+            bbox,
+            parts: vec![Part {
+                name: String::new(),
+            }],
+            skipped: Vec::new(),
+            warnings,
         }
     }
 

@@ -87,6 +87,7 @@ impl Tessellators {
         out.trim_error = 0.0;
         match &patch.surface {
             PatchSurface::Bezier(b) => self.bezier.tessellate(b, eps, out),
+            PatchSurface::Mesh(m) => mesh_patch(m, eps, out),
             PatchSurface::Trimmed(face) => {
                 let scale = patch.scale().max(1e-300);
                 let local = eps / scale;
@@ -109,6 +110,21 @@ impl Tessellators {
             }
         }
     }
+}
+
+/// A mesh patch at full resolution (exact: error 0).
+fn mesh_patch(m: &crate::model::mesh::MeshPatch, eps: f64, out: &mut PatchMesh) {
+    out.positions.clear();
+    out.positions.extend_from_slice(&m.positions);
+    out.normals.clear();
+    out.normals.extend_from_slice(&m.normals);
+    out.triangles.clear();
+    out.triangles.extend_from_slice(&m.triangles);
+    out.borders.clear();
+    out.borders.extend(m.borders.iter().cloned());
+    out.eps_target = eps;
+    out.error = 0.0;
+    out.resolution = Resolution { nu: 1, nv: 1 };
 }
 
 fn fail(out: &mut PatchMesh, eps: f64, why: String) {
