@@ -209,9 +209,9 @@ fn missing_file_is_io_error() {
 
 #[test]
 fn unsupported_extension() {
-    let err = load_bad("teapot.obj", None);
+    let err = load_bad("teapot.xyz", None);
     assert!(
-        matches!(&err, LoadError::UnsupportedFormat { extension, .. } if extension == "obj"),
+        matches!(&err, LoadError::UnsupportedFormat { extension, .. } if extension == "xyz"),
         "{err:?}"
     );
     let err = load(Path::new("no_extension")).expect_err("no extension");
