@@ -9,10 +9,12 @@
 //! to object errors in one place; `check` measures rendered images (cracks, growth, goldens).
 
 pub mod check;
+pub mod geom;
 pub mod io;
 pub mod isolate;
 pub mod lod;
 pub mod model;
+pub mod mt;
 pub mod render;
 pub mod tessellate;
 pub mod view;

@@ -114,6 +114,22 @@ impl LoadError {
     }
 }
 
+/// A progress bar on a terminal for long loads (`n` ≥ 20 steps), hidden otherwise (and
+/// indicatif draws nothing when stderr is not a terminal).
+pub(crate) fn progress(n: usize, what: &str) -> indicatif::ProgressBar {
+    if n < 20 {
+        return indicatif::ProgressBar::hidden();
+    }
+    let pb = indicatif::ProgressBar::new(n as u64);
+    pb.set_style(
+        indicatif::ProgressStyle::with_template(&format!(
+            "{{bar:40}} {{pos}}/{{len}} {what} {{elapsed}}"
+        ))
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    pb
+}
+
 /// Triangles per patch when a mesh is split into patches (the 1–2 k).
 pub const DEFAULT_PATCH_TRIANGLES: usize = 1500;
 
@@ -144,7 +160,11 @@ pub fn load(path: &Path) -> Result<Scene, LoadError> {
         } else {
             mesh::read_gltf(path)?
         };
-        Ok(Scene::from_mesh(mesh, DEFAULT_PATCH_TRIANGLES, UpAxis::Y))
+        let patches = mesh.triangles.len().div_ceil(DEFAULT_PATCH_TRIANGLES);
+        let pb = progress(patches, "patch hierarchies");
+        let scene = Scene::from_mesh(mesh, DEFAULT_PATCH_TRIANGLES, UpAxis::Y, || pb.inc(1));
+        pb.finish_and_clear();
+        Ok(scene)
     } else {
         Err(LoadError::UnsupportedFormat {
             path: path.to_path_buf(),

@@ -64,6 +64,16 @@ pub struct MeshPatch {
     pub source_triangles: Vec<u32>,
     /// Index in the partitioned mesh of every patch vertex.
     pub source_vertices: Vec<u32>,
+    /// The patch's multi-resolution hierarchy (empty until built, see
+    /// [`MeshPatch::build_hierarchy`]).
+    pub hierarchy: crate::mt::MtHierarchy,
+}
+
+impl MeshPatch {
+    /// Builds the patch's MT hierarchy ([`crate::mt`]).
+    pub fn build_hierarchy(&mut self) {
+        self.hierarchy = crate::mt::MtHierarchy::build(&self.positions, &self.triangles);
+    }
 }
 
 /// Edge key with the smaller index first.
@@ -231,6 +241,7 @@ pub fn extract(mesh: &TriMesh, normals: &[Vec3], triangles: &[u32]) -> MeshPatch
         borders,
         source_triangles: triangles.to_vec(),
         source_vertices: sources,
+        hierarchy: Default::default(),
     }
 }
 

@@ -196,8 +196,14 @@ impl Scene {
     }
 
     /// Builds a scene from a triangle mesh: welded, split into patches of about
-    /// `patch_triangles` triangles ([`mesh::partition`]).
-    pub fn from_mesh(mut m: mesh::TriMesh, patch_triangles: usize, up: UpAxis) -> Scene {
+    /// `patch_triangles` triangles ([`mesh::partition`]), each with its MT hierarchy (built
+    /// on rayon; `on_patch` is called as each is done, for progress).
+    pub fn from_mesh(
+        mut m: mesh::TriMesh,
+        patch_triangles: usize,
+        up: UpAxis,
+        on_patch: impl Fn() + Sync,
+    ) -> Scene {
         let dropped = m.weld();
         let mut warnings = Vec::new();
         if dropped > 0 {
@@ -206,7 +212,15 @@ impl Scene {
             ));
         }
         let bbox = box_of(m.positions.iter().map(|p| p.as_dvec3())).unwrap_or_default();
-        let patches: Vec<Patch> = mesh::partition(&m, patch_triangles)
+        let mut parts = mesh::partition(&m, patch_triangles);
+        {
+            use rayon::prelude::*;
+            parts.par_iter_mut().for_each(|p| {
+                p.build_hierarchy();
+                on_patch();
+            });
+        }
+        let patches: Vec<Patch> = parts
             .into_iter()
             .enumerate()
             .map(|(i, p)| Patch {

@@ -87,7 +87,7 @@ impl Tessellators {
         out.trim_error = 0.0;
         match &patch.surface {
             PatchSurface::Bezier(b) => self.bezier.tessellate(b, eps, out),
-            PatchSurface::Mesh(m) => mesh_patch(m, eps, out),
+            PatchSurface::Mesh(m) => mesh_patch(m, eps, shared_borders, out),
             PatchSurface::Trimmed(face) => {
                 let scale = patch.scale().max(1e-300);
                 let local = eps / scale;
@@ -112,18 +112,27 @@ impl Tessellators {
     }
 }
 
-/// A mesh patch at full resolution (exact: error 0).
-fn mesh_patch(m: &crate::model::mesh::MeshPatch, eps: f64, out: &mut PatchMesh) {
+/// A mesh patch: the cut of its MT hierarchy for `eps` (the original triangles with
+/// `original`, as the watertight crack-check reference wants), its border loops and the
+/// achieved error.
+fn mesh_patch(m: &crate::model::mesh::MeshPatch, eps: f64, original: bool, out: &mut PatchMesh) {
     out.positions.clear();
     out.positions.extend_from_slice(&m.positions);
     out.normals.clear();
     out.normals.extend_from_slice(&m.normals);
-    out.triangles.clear();
-    out.triangles.extend_from_slice(&m.triangles);
-    out.borders.clear();
-    out.borders.extend(m.borders.iter().cloned());
+    out.error = if original || m.hierarchy.node_count() == 0 {
+        out.triangles.clear();
+        out.triangles.extend_from_slice(&m.triangles);
+        0.0
+    } else {
+        m.hierarchy.cut(eps, &mut out.triangles)
+    };
+    out.borders = if original || m.hierarchy.node_count() == 0 {
+        m.borders.clone()
+    } else {
+        crate::model::mesh::border_loops(&out.triangles)
+    };
     out.eps_target = eps;
-    out.error = 0.0;
     out.resolution = Resolution { nu: 1, nv: 1 };
 }
 

@@ -21,7 +21,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 use glam::{DMat4, DVec3};
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::ProgressBar;
 use rayon::prelude::*;
 use truck_stepio::r#in::alias::re_exports::Point3;
 use truck_stepio::r#in::ruststep::ast::Name;
@@ -253,17 +253,12 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
 /// A face with its bounding box (own coordinates).
 type Probed = (TrimmedFace, (DVec3, DVec3));
 
-/// A progress bar on a terminal for long loads, hidden otherwise.
+/// A progress bar on a terminal for long loads (≥ 200 faces), hidden otherwise.
 fn progress(n: usize, what: &str) -> ProgressBar {
     if n < 200 {
         return ProgressBar::hidden();
     }
-    let pb = ProgressBar::new(n as u64);
-    pb.set_style(
-        ProgressStyle::with_template(&format!("{{bar:40}} {{pos}}/{{len}} {what} {{elapsed}}"))
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
-    pb
+    super::progress(n, what)
 }
 
 /// Face entity ids of a shell (`CLOSED_SHELL(name, (faces…))`, also `OPEN_SHELL`,
