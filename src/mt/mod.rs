@@ -159,7 +159,6 @@ struct Builder {
     /// Border vertices: the two border neighbours (fixed when it has other than two).
     border: Vec<Option<Vec<u32>>>,
     stamp: Vec<u32>,
-    original: usize,
 }
 
 impl Builder {
@@ -215,7 +214,6 @@ impl Builder {
             quadric,
             border,
             stamp: vec![0; n],
-            original: m,
         }
     }
 
@@ -300,16 +298,6 @@ impl Builder {
         })
     }
 
-    fn push_around(&self, v: u32, heap: &mut BinaryHeap<Candidate>) {
-        for w in self.neighbours(v) {
-            for (a, b) in [(v, w), (w, v)] {
-                if let Some(c) = self.candidate(a, b) {
-                    heap.push(c);
-                }
-            }
-        }
-    }
-
     fn run(mut self) -> MtHierarchy {
         let mut heap = BinaryHeap::new();
         for v in 0..self.pos.len() as u32 {
@@ -333,8 +321,19 @@ impl Builder {
             for &w in touched.iter().chain(std::iter::once(&c.to)) {
                 self.stamp[w as usize] += 1;
             }
+            // Every edge at a touched vertex, once, both directions.
+            let mut edges: Vec<(u32, u32)> = Vec::new();
             for &w in touched.iter().chain(std::iter::once(&c.to)) {
-                self.push_around(w, &mut heap);
+                edges.extend(self.neighbours(w).into_iter().map(|x| (w.min(x), w.max(x))));
+            }
+            edges.sort_unstable();
+            edges.dedup();
+            for (a, b) in edges {
+                for (x, y) in [(a, b), (b, a)] {
+                    if let Some(c) = self.candidate(x, y) {
+                        heap.push(c);
+                    }
+                }
             }
         }
         MtHierarchy {
@@ -423,31 +422,31 @@ impl Builder {
     }
 
     /// Sampled two-sided Hausdorff distance between the triangles `fan` and the original
-    /// triangles `region`.
+    /// triangles `region`. A sample stops scanning as soon as it finds a triangle no farther
+    /// than the worst distance so far (it cannot raise the maximum): exact, and most samples
+    /// stop at once.
     fn hausdorff(&self, fan: &[u32], region: &[u32]) -> f64 {
         let mut worst = 0.0f64;
-        for &t in fan {
-            let [a, b, c] = self.tris[t as usize].map(|i| self.pos[i as usize]);
-            for s in samples(a, b, c) {
-                let d = region
-                    .iter()
-                    .map(|&o| self.dist(s, o))
-                    .fold(f64::INFINITY, f64::min);
-                worst = worst.max(d);
+        let farthest = |from: &[u32], to: &[u32], worst: &mut f64| {
+            for &t in from {
+                let [a, b, c] = self.tris[t as usize].map(|i| self.pos[i as usize]);
+                for s in samples(a, b, c) {
+                    let mut best = f64::INFINITY;
+                    for &o in to {
+                        best = best.min(self.dist(s, o));
+                        if best <= *worst {
+                            break;
+                        }
+                    }
+                    if best.is_finite() {
+                        *worst = worst.max(best);
+                    }
+                }
             }
-        }
-        for &o in region {
-            debug_assert!((o as usize) < self.original);
-            let [a, b, c] = self.tris[o as usize].map(|i| self.pos[i as usize]);
-            for s in samples(a, b, c) {
-                let d = fan
-                    .iter()
-                    .map(|&t| self.dist(s, t))
-                    .fold(f64::INFINITY, f64::min);
-                worst = worst.max(d);
-            }
-        }
-        if worst.is_finite() { worst } else { 0.0 }
+        };
+        farthest(fan, region, &mut worst);
+        farthest(region, fan, &mut worst);
+        worst
     }
 }
 
