@@ -181,6 +181,16 @@ impl Scene {
                 color: None,
             })
             .collect();
+        Scene::single_part(patches, up, bbox, Vec::new())
+    }
+
+    /// A scene of one unnamed part, its bounds from the patches'.
+    fn single_part(
+        patches: Vec<Patch>,
+        up: UpAxis,
+        bbox: (DVec3, DVec3),
+        warnings: Vec<String>,
+    ) -> Scene {
         let spheres: Vec<Sphere> = patches.iter().map(|p| p.bounds).collect();
         Scene {
             bounds: Sphere::union(&spheres),
@@ -191,7 +201,7 @@ impl Scene {
                 name: String::new(),
             }],
             skipped: Vec::new(),
-            warnings: Vec::new(),
+            warnings,
         }
     }
 
@@ -232,18 +242,7 @@ impl Scene {
                 color: None,
             })
             .collect();
-        let spheres: Vec<Sphere> = patches.iter().map(|p| p.bounds).collect();
-        Scene {
-            bounds: Sphere::union(&spheres),
-            patches,
-            up,
-            bbox,
-            parts: vec![Part {
-                name: String::new(),
-            }],
-            skipped: Vec::new(),
-            warnings,
-        }
+        Scene::single_part(patches, up, bbox, warnings)
     }
 
     /// Length of the diagonal of [`Scene::bbox`].

@@ -844,6 +844,28 @@ mod tests {
         m
     }
 
+    /// Sampled two-sided Hausdorff distance between two triangle sets over `pos`.
+    fn sampled_hausdorff(pos: &[DVec3], x: &[[u32; 3]], y: &[[u32; 3]]) -> f64 {
+        let dist_to = |p: DVec3, tris: &[[u32; 3]]| {
+            tris.iter()
+                .map(|t| {
+                    let [a, b, c] = t.map(|i| pos[i as usize]);
+                    point_triangle_distance(p, a, b, c)
+                })
+                .fold(f64::INFINITY, f64::min)
+        };
+        let mut worst = 0.0f64;
+        for (from, to) in [(x, y), (y, x)] {
+            for t in from {
+                let [a, b, c] = t.map(|i| pos[i as usize]);
+                for s in samples(a, b, c) {
+                    worst = worst.max(dist_to(s, to));
+                }
+            }
+        }
+        worst
+    }
+
     fn edges_used(tris: &[[u32; 3]]) -> HashMap<(u32, u32), u32> {
         let mut uses = HashMap::new();
         for t in tris {
@@ -972,27 +994,7 @@ mod tests {
                     (area - 9.0).abs() < 0.02,
                     "{target}: area {area} at ε {eps}"
                 );
-                let dist_to = |p: DVec3, tris: &[[u32; 3]]| {
-                    tris.iter()
-                        .map(|t| {
-                            point_triangle_distance(
-                                p,
-                                pos[t[0] as usize],
-                                pos[t[1] as usize],
-                                pos[t[2] as usize],
-                            )
-                        })
-                        .fold(f64::INFINITY, f64::min)
-                };
-                let mut worst = 0.0f64;
-                for (from, to) in [(&cut, &m.triangles), (&m.triangles, &cut)] {
-                    for t in from.iter() {
-                        let [a, b, c] = t.map(|i| pos[i as usize]);
-                        for s in samples(a, b, c) {
-                            worst = worst.max(dist_to(s, to));
-                        }
-                    }
-                }
+                let worst = sampled_hausdorff(&pos, &cut, &m.triangles);
                 assert!(worst <= eps + 1e-9, "{target}: Hausdorff {worst} > ε {eps}");
             }
             // The finest cut is still the original mesh.
@@ -1010,30 +1012,10 @@ mod tests {
         let m = bumpy(10);
         let h = MtHierarchy::build(&m.positions, &m.triangles);
         let pos: Vec<DVec3> = m.positions.iter().map(|p| p.as_dvec3()).collect();
-        let dist_to = |p: DVec3, tris: &[[u32; 3]]| {
-            tris.iter()
-                .map(|t| {
-                    point_triangle_distance(
-                        p,
-                        pos[t[0] as usize],
-                        pos[t[1] as usize],
-                        pos[t[2] as usize],
-                    )
-                })
-                .fold(f64::INFINITY, f64::min)
-        };
         let mut cut = Vec::new();
         for eps in [0.002, 0.01, 0.05] {
             let achieved = h.cut(eps, &mut cut);
-            let mut worst = 0.0f64;
-            for (from, to) in [(&cut, &m.triangles), (&m.triangles, &cut)] {
-                for t in from.iter() {
-                    let [a, b, c] = t.map(|i| pos[i as usize]);
-                    for s in samples(a, b, c) {
-                        worst = worst.max(dist_to(s, to));
-                    }
-                }
-            }
+            let worst = sampled_hausdorff(&pos, &cut, &m.triangles);
             assert!(
                 worst <= eps + 1e-9,
                 "ε {eps}: Hausdorff {worst} (achieved {achieved})"
