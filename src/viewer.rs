@@ -499,13 +499,17 @@ impl App {
 
     /// One frame; returns whether the queue still has work.
     fn frame(&mut self) -> Result<bool, ViewerError> {
+        let Some((w, h)) = self
+            .state
+            .as_ref()
+            .map(|s| (s.config.width, s.config.height))
+        else {
+            return Ok(false);
+        };
+        let view = self.view(w, h);
         let Some(state) = self.state.as_mut() else {
             return Ok(false);
         };
-        let (w, h) = (state.config.width, state.config.height);
-        let view = self
-            .orbit
-            .view(&self.scene, self.options.fov_y, (w.max(1), h.max(1)));
         let start = Instant::now();
         let stats = state.lod.update(&self.scene, &view);
         let generation = state.lod.generation();

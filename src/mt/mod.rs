@@ -517,7 +517,6 @@ impl Reducer {
 struct Builder {
     pos: Vec<DVec3>,
     tris: Vec<[u32; 3]>,
-    alive: Vec<bool>,
     created_by: Vec<u32>,
     removed_by: Vec<u32>,
     node_error: Vec<f64>,
@@ -575,7 +574,6 @@ impl Builder {
         Builder {
             pos,
             tris: triangles.to_vec(),
-            alive: vec![true; m],
             created_by: vec![0; m],
             removed_by: vec![NEVER; m],
             node_error: vec![0.0],
@@ -721,7 +719,6 @@ impl Builder {
         let mut region: Vec<u32> = Vec::new();
         let mut inherited = 0.0f64;
         for &t in &removed {
-            self.alive[t as usize] = false;
             self.removed_by[t as usize] = node;
             inherited = inherited.max(self.node_error[self.created_by[t as usize] as usize]);
             region.append(&mut self.covers[t as usize]);
@@ -738,7 +735,6 @@ impl Builder {
             let new = tri.map(|i| if i == from { to } else { i });
             let id = self.tris.len() as u32;
             self.tris.push(new);
-            self.alive.push(true);
             self.created_by.push(node);
             self.removed_by.push(NEVER);
             self.covers.push(Vec::new());

@@ -120,18 +120,15 @@ fn mesh_patch(m: &crate::model::mesh::MeshPatch, eps: f64, original: bool, out: 
     out.positions.extend_from_slice(&m.positions);
     out.normals.clear();
     out.normals.extend_from_slice(&m.normals);
-    out.error = if original || m.hierarchy.node_count() == 0 {
+    if original || m.hierarchy.node_count() == 0 {
         out.triangles.clear();
         out.triangles.extend_from_slice(&m.triangles);
-        0.0
+        out.borders = m.borders.clone();
+        out.error = 0.0;
     } else {
-        m.hierarchy.cut(eps, &mut out.triangles)
-    };
-    out.borders = if original || m.hierarchy.node_count() == 0 {
-        m.borders.clone()
-    } else {
-        crate::model::mesh::border_loops(&out.triangles)
-    };
+        out.error = m.hierarchy.cut(eps, &mut out.triangles);
+        out.borders = crate::model::mesh::border_loops(&out.triangles);
+    }
     out.eps_target = eps;
     out.resolution = Resolution { nu: 1, nv: 1 };
 }
