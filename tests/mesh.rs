@@ -153,8 +153,14 @@ fn every_cut_of_the_bunny_patches_is_a_triangulation_within_its_error() {
     let mut cut = Vec::new();
     for p in mesh_patches(scene).into_iter().step_by(33) {
         let h = &p.hierarchy;
+        // Reduced by arc collapse to the default arc size, and still many levels.
         assert!(
-            h.node_count() > p.triangles.len() / 4,
+            h.mean_arc_size() >= 0.9 * patchwork::mt::DEFAULT_ARC_SIZE,
+            "{} triangles per arc",
+            h.mean_arc_size()
+        );
+        assert!(
+            h.node_count() > p.triangles.len() / 20,
             "{} nodes",
             h.node_count()
         );
@@ -232,4 +238,51 @@ fn independently_simplified_patches_are_crack_free_with_fat_borders() {
     );
     // The patches really are simplified independently: without fat borders they crack.
     assert!(r.total(patchwork::render::FatBorders::Off).cracks() > 0);
+}
+
+/// The bunny drawn through its hierarchies' static per-arc buffers (the default) against the
+/// golden, and against the same cuts uploaded as plain triangles: the same image.
+#[test]
+fn bunny_golden_and_static_arcs_draw_what_uploaded_triangles_draw() {
+    use patchwork::check::golden::{GoldenOutcome, Thresholds, compare_with_golden};
+    use patchwork::render::{RenderOptions, Shading};
+    use patchwork::view::{self, View};
+    let scene = bunny();
+    let size = (400, 300);
+    let fov = view::DEFAULT_FOV_Y_DEG.to_radians();
+    let v = View::framing(&scene.bounds, scene.up.vector(), fov, size);
+    let meshes = patchwork::tessellate::tessellate_scene(scene, &v, view::DEFAULT_PIXEL_ERROR);
+    assert!(meshes.iter().all(|m| m.arcs.is_some()), "cuts carry ranges");
+    let opts = RenderOptions {
+        shading: Shading::Lit,
+        msaa: 4,
+        ..RenderOptions::default()
+    };
+    let mut renderer = common::renderer();
+    let gpu = renderer.upload(&meshes);
+    let drawn: usize = meshes.iter().map(|m| m.triangles.len()).sum();
+    assert_eq!(gpu.triangle_count() as usize, drawn);
+    assert!(gpu.static_range_count() >= meshes.len());
+    let fixed = renderer.render(&gpu, &v, &opts).expect("render");
+    renderer.static_arcs = false;
+    let gpu = renderer.upload(&meshes);
+    assert_eq!(gpu.static_range_count(), 0);
+    assert_eq!(gpu.triangle_count() as usize, drawn);
+    let uploaded = renderer.render(&gpu, &v, &opts).expect("render");
+    let differ = fixed
+        .color
+        .chunks_exact(4)
+        .zip(uploaded.color.chunks_exact(4))
+        .filter(|(a, b)| a.iter().zip(b.iter()).any(|(x, y)| x.abs_diff(*y) > 2))
+        .count();
+    assert!(
+        differ * 1000 <= (size.0 * size.1) as usize,
+        "{differ} pixels differ between static arcs and uploaded triangles"
+    );
+    let path = common::root().join("golden/mesh-bunny.png");
+    match compare_with_golden(&path, &fixed.to_rgba_image(), Thresholds::default()) {
+        Ok(GoldenOutcome::Matched(score)) => eprintln!("mesh-bunny: {score:?}"),
+        Ok(GoldenOutcome::Updated) => eprintln!("mesh-bunny: golden rewritten (GOLDEN_UPDATE=1)"),
+        Err(e) => panic!("{e}"),
+    }
 }

@@ -162,7 +162,13 @@ pub fn load(path: &Path) -> Result<Scene, LoadError> {
         };
         let patches = mesh.triangles.len().div_ceil(DEFAULT_PATCH_TRIANGLES);
         let pb = progress(patches, "patch hierarchies");
-        let scene = Scene::from_mesh(mesh, DEFAULT_PATCH_TRIANGLES, UpAxis::Y, || pb.inc(1));
+        let scene = Scene::from_mesh(
+            mesh,
+            DEFAULT_PATCH_TRIANGLES,
+            crate::mt::DEFAULT_ARC_SIZE,
+            UpAxis::Y,
+            || pb.inc(1),
+        );
         pb.finish_and_clear();
         Ok(scene)
     } else {

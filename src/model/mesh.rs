@@ -67,12 +67,36 @@ pub struct MeshPatch {
     /// The patch's multi-resolution hierarchy (empty until built, see
     /// [`MeshPatch::build_hierarchy`]).
     pub hierarchy: crate::mt::MtHierarchy,
+    /// The cut drawn last, moved from there to the next ε (frame coherence).
+    pub cut: CutCache,
+}
+
+/// The last cut of a patch's hierarchy. A cache: clones start empty and it never makes two
+/// patches differ.
+#[derive(Debug, Default)]
+pub struct CutCache(pub std::sync::Mutex<Option<crate::mt::CutState>>);
+
+impl Clone for CutCache {
+    fn clone(&self) -> Self {
+        Self::default()
+    }
+}
+
+impl PartialEq for CutCache {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
 }
 
 impl MeshPatch {
-    /// Builds the patch's MT hierarchy ([`crate::mt`]).
-    pub fn build_hierarchy(&mut self) {
+    /// Builds the patch's MT hierarchy ([`crate::mt`]) and reduces it by arc collapses to
+    /// `arc_size` triangles per arc on average (no reduction below 1.5).
+    pub fn build_hierarchy(&mut self, arc_size: f64) {
         self.hierarchy = crate::mt::MtHierarchy::build(&self.positions, &self.triangles);
+        if arc_size >= 1.5 {
+            self.hierarchy.reduce(arc_size);
+        }
+        self.cut = CutCache::default();
     }
 }
 
@@ -242,6 +266,7 @@ pub fn extract(mesh: &TriMesh, normals: &[Vec3], triangles: &[u32]) -> MeshPatch
         source_triangles: triangles.to_vec(),
         source_vertices: sources,
         hierarchy: Default::default(),
+        cut: Default::default(),
     }
 }
 

@@ -206,11 +206,13 @@ impl Scene {
     }
 
     /// Builds a scene from a triangle mesh: welded, split into patches of about
-    /// `patch_triangles` triangles ([`mesh::partition`]), each with its MT hierarchy (built
-    /// on rayon; `on_patch` is called as each is done, for progress).
+    /// `patch_triangles` triangles ([`mesh::partition`]), each with its MT hierarchy reduced
+    /// to `arc_size` triangles per arc (built on rayon; `on_patch` is called as each is done,
+    /// for progress).
     pub fn from_mesh(
         mut m: mesh::TriMesh,
         patch_triangles: usize,
+        arc_size: f64,
         up: UpAxis,
         on_patch: impl Fn() + Sync,
     ) -> Scene {
@@ -226,7 +228,7 @@ impl Scene {
         {
             use rayon::prelude::*;
             parts.par_iter_mut().for_each(|p| {
-                p.build_hierarchy();
+                p.build_hierarchy(arc_size);
                 on_patch();
             });
         }

@@ -35,6 +35,8 @@ pub struct Gpu {
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
     pub info: wgpu::AdapterInfo,
+    /// Whether the device draws from indirect buffers (`multi_draw_indexed_indirect`).
+    pub indirect: bool,
 }
 
 impl Gpu {
@@ -71,6 +73,10 @@ impl Gpu {
     /// Opens a device on `adapter`.
     pub fn open(adapter: &wgpu::Adapter) -> Result<Gpu, RenderError> {
         let info = adapter.get_info();
+        let indirect = adapter
+            .get_downlevel_capabilities()
+            .flags
+            .contains(wgpu::DownlevelFlags::INDIRECT_EXECUTION);
         let limits = adapter.limits();
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("patchwork"),
@@ -88,6 +94,7 @@ impl Gpu {
             device,
             queue,
             info,
+            indirect,
         })
     }
 

@@ -1,7 +1,9 @@
 //! Headless wgpu renderer: patch surfaces, then their fat borders, into an offscreen texture
 //! of any size with a depth buffer, read back with rows padded to 256 bytes.
 //!
-//! One frame = one indexed draw of every patch's triangles, then (unless fat borders are off)
+//! One frame = one indexed draw of every patch's triangles (mesh patches drawn as cuts of
+//! their hierarchies instead draw index ranges of buffers built once per patch — one
+//! multi-draw-indirect per patch, Holst's static arcs — so a new cut uploads only its ranges), then (unless fat borders are off)
 //! one indexed draw of the chosen fat-border template over every border vertex (no instancing:
 //! llvmpipe pays a fixed cost per instance). Shading:
 //! `lit` (two-sided: CAD patches are not consistently oriented, so there is no back-face
@@ -18,6 +20,7 @@ pub use fat_border::{BorderGeometry, BorderVertex, FatBorders};
 pub use gpu::{Gpu, RenderError};
 
 use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
 
 use glam::DVec3;
 use wgpu::util::DeviceExt;
@@ -154,11 +157,40 @@ pub struct GpuMeshes {
     /// Index buffers for the 6-, 4- and 2-vertex variants, with their index counts.
     border_indices: [(wgpu::Buffer, u32); 3],
     border_vertex_count: u32,
+    /// Mesh patches drawn from their static buffers: the patch, its first draw in
+    /// `indirect` (and `ranges`) and its number of draws.
+    statics: Vec<(Arc<StaticPatch>, u32, u32)>,
+    /// One `DrawIndexedIndirectArgs` per range (when the device draws indirect).
+    indirect: Option<wgpu::Buffer>,
+    /// The ranges `[first index, index count]`, for devices without indirect draws.
+    ranges: Vec<[u32; 2]>,
+    static_triangles: u32,
 }
+
+/// Every vertex and every triangle of one mesh patch's hierarchy, uploaded once; cuts are
+/// drawn as index ranges of it.
+#[derive(Debug)]
+struct StaticPatch {
+    vertices: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    /// Keeps the patch alive, so its address (the cache key) is not reused.
+    patch: Arc<crate::model::mesh::MeshPatch>,
+}
+
+/// Size of one `DrawIndexedIndirectArgs`.
+const DRAW_ARGS_BYTES: u64 = 20;
+
+/// Cache key of a static patch: the patch's address, its id and its colour.
+type StaticKey = (usize, u32, [u8; 4]);
 
 impl GpuMeshes {
     pub fn triangle_count(&self) -> u32 {
-        self.index_count / 3
+        self.index_count / 3 + self.static_triangles
+    }
+
+    /// Index ranges drawn from static per-patch buffers (after merging adjacent arcs).
+    pub fn static_range_count(&self) -> usize {
+        self.ranges.len()
     }
     /// Border vertices (of the patch polylines, before expansion).
     pub fn border_vertex_count(&self) -> u32 {
@@ -216,6 +248,11 @@ pub struct Renderer {
     pipelines: HashMap<Target, Pipelines>,
     /// Render targets, kept between frames of the same size.
     targets: HashMap<Target, Targets>,
+    /// Static buffers of mesh patches' hierarchies, built on first use.
+    statics: Mutex<HashMap<StaticKey, Arc<StaticPatch>>>,
+    /// Draw mesh-patch cuts from static per-patch buffers (default) instead of uploading
+    /// their triangles with every new tessellation.
+    pub static_arcs: bool,
 }
 
 /// The textures, uniform and readback buffer one pass renders with; reused while the image
@@ -342,6 +379,8 @@ impl Renderer {
             bind_layout,
             pipelines: HashMap::new(),
             targets: HashMap::new(),
+            statics: Mutex::new(HashMap::new()),
+            static_arcs: true,
         })
     }
 
@@ -354,7 +393,21 @@ impl Renderer {
         let meshes: Vec<&PatchMesh> = meshes.into_iter().collect();
         let mut vertices = Vec::new();
         let mut indices: Vec<u32> = Vec::new();
+        let (mut statics, mut ranges, mut static_triangles) = (Vec::new(), Vec::new(), 0u32);
         for m in meshes.iter().copied() {
+            if let Some(cut) = m.arcs.as_ref().filter(|_| self.static_arcs) {
+                let first = ranges.len() as u32;
+                for &[start, count] in &cut.ranges {
+                    ranges.push([start * 3, count * 3]);
+                    static_triangles += count;
+                }
+                statics.push((
+                    self.static_patch(m, &cut.patch),
+                    first,
+                    ranges.len() as u32 - first,
+                ));
+                continue;
+            }
             let base = vertices.len() as u32;
             let color = packed_color(m.color);
             vertices.extend(
@@ -407,7 +460,88 @@ impl Renderer {
                 (buf, idx.len() as u32)
             }),
             border_vertex_count: (borders.vertices.len() / fat_border::SLOTS) as u32,
+            indirect: (self.gpu.indirect && !ranges.is_empty()).then(|| {
+                let args: Vec<u8> = ranges
+                    .iter()
+                    .flat_map(|&[first_index, index_count]| {
+                        wgpu::util::DrawIndexedIndirectArgs {
+                            index_count,
+                            instance_count: 1,
+                            first_index,
+                            base_vertex: 0,
+                            first_instance: 0,
+                        }
+                        .as_bytes()
+                        .to_vec()
+                    })
+                    .collect();
+                init("cut ranges", &args, wgpu::BufferUsages::INDIRECT)
+            }),
+            statics,
+            ranges,
+            static_triangles,
         }
+    }
+
+    /// The static buffers of a mesh patch's hierarchy (built on first use). Entries whose
+    /// patch nobody else holds any more are dropped.
+    fn static_patch(
+        &self,
+        m: &PatchMesh,
+        patch: &Arc<crate::model::mesh::MeshPatch>,
+    ) -> Arc<StaticPatch> {
+        let color = packed_color(m.color);
+        let key = (Arc::as_ptr(patch) as usize, m.patch_id, color);
+        let mut cache = self.statics.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(s) = cache.get(&key) {
+            return s.clone();
+        }
+        cache.retain(|_, s| Arc::strong_count(&s.patch) > 1);
+        let vertices: Vec<SurfaceVertex> = patch
+            .positions
+            .iter()
+            .zip(&patch.normals)
+            .map(|(p, n)| SurfaceVertex {
+                position: (*p).into(),
+                normal: (*n).into(),
+                patch_id: m.patch_id,
+                color,
+            })
+            .collect();
+        let indices: Vec<u32> = patch
+            .hierarchy
+            .triangles
+            .iter()
+            .flatten()
+            .copied()
+            .collect();
+        let device = &self.gpu.device;
+        let buffer = |label, contents: &[u8], usage| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: if contents.is_empty() {
+                    &[0; 16]
+                } else {
+                    contents
+                },
+                usage,
+            })
+        };
+        let s = Arc::new(StaticPatch {
+            vertices: buffer(
+                "patch vertices",
+                bytemuck::cast_slice(&vertices),
+                wgpu::BufferUsages::VERTEX,
+            ),
+            indices: buffer(
+                "patch hierarchy indices",
+                bytemuck::cast_slice(&indices),
+                wgpu::BufferUsages::INDEX,
+            ),
+            patch: patch.clone(),
+        });
+        cache.insert(key, s.clone());
+        s
     }
 
     fn pipelines(&mut self, target: Target) -> &Pipelines {
@@ -683,6 +817,26 @@ impl Renderer {
                 pass.set_vertex_buffer(0, meshes.vertices.slice(..));
                 pass.set_index_buffer(meshes.indices.slice(..), wgpu::IndexFormat::Uint32);
                 pass.draw_indexed(0..meshes.index_count, 0, 0..1);
+            }
+            if !meshes.statics.is_empty() {
+                pass.set_pipeline(&pipes.surface);
+                for (patch, first, count) in &meshes.statics {
+                    pass.set_vertex_buffer(0, patch.vertices.slice(..));
+                    pass.set_index_buffer(patch.indices.slice(..), wgpu::IndexFormat::Uint32);
+                    match &meshes.indirect {
+                        Some(args) => pass.multi_draw_indexed_indirect(
+                            args,
+                            *first as u64 * DRAW_ARGS_BYTES,
+                            *count,
+                        ),
+                        None => {
+                            let ranges = &meshes.ranges[*first as usize..(first + count) as usize];
+                            for &[start, len] in ranges {
+                                pass.draw_indexed(start..start + len, 0, 0..1);
+                            }
+                        }
+                    }
+                }
             }
             if let Some((indices, count)) = meshes.border_indices(opts.fat_borders)
                 && *count > 0

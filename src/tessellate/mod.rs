@@ -40,6 +40,17 @@ pub struct PatchMesh {
     /// The patch's own colour (a STEP part or face style), drawn by `lit` shading; `None`
     /// draws the renderer's default colour.
     pub color: Option<[f32; 3]>,
+    /// For a mesh patch drawn as a cut of its hierarchy: the cut as ranges of the
+    /// hierarchy's triangles, which the renderer draws from index buffers built once per
+    /// patch (`triangles` holds the same triangles for CPU work).
+    pub arcs: Option<CutRanges>,
+}
+
+/// A cut as ranges `[first, count]` of its patch's [`crate::mt::MtHierarchy::triangles`].
+#[derive(Clone, Debug)]
+pub struct CutRanges {
+    pub patch: std::sync::Arc<crate::model::mesh::MeshPatch>,
+    pub ranges: Vec<[u32; 2]>,
 }
 
 impl PatchMesh {
@@ -85,6 +96,7 @@ impl Tessellators {
         out.color = patch.color;
         out.failure = None;
         out.trim_error = 0.0;
+        out.arcs = None;
         match &patch.surface {
             PatchSurface::Bezier(b) => self.bezier.tessellate(b, eps, out),
             PatchSurface::Mesh(m) => mesh_patch(m, eps, shared_borders, out),
@@ -114,8 +126,13 @@ impl Tessellators {
 
 /// A mesh patch: the cut of its MT hierarchy for `eps` (the original triangles with
 /// `original`, as the watertight crack-check reference wants), its border loops and the
-/// achieved error.
-fn mesh_patch(m: &crate::model::mesh::MeshPatch, eps: f64, original: bool, out: &mut PatchMesh) {
+/// achieved error. The cut is moved from the patch's previous one (frame coherence).
+fn mesh_patch(
+    m: &std::sync::Arc<crate::model::mesh::MeshPatch>,
+    eps: f64,
+    original: bool,
+    out: &mut PatchMesh,
+) {
     out.positions.clear();
     out.positions.extend_from_slice(&m.positions);
     out.normals.clear();
@@ -126,8 +143,22 @@ fn mesh_patch(m: &crate::model::mesh::MeshPatch, eps: f64, original: bool, out: 
         out.borders = m.borders.clone();
         out.error = 0.0;
     } else {
-        out.error = m.hierarchy.cut(eps, &mut out.triangles);
-        out.borders = crate::model::mesh::border_loops(&out.triangles);
+        let h = &m.hierarchy;
+        let mut last = m.cut.0.lock().unwrap_or_else(|e| e.into_inner());
+        let state = last.get_or_insert_with(|| h.finest_cut());
+        h.move_cut(state, eps);
+        let mut ranges = Vec::new();
+        out.error = h.cut_ranges(state, &mut ranges);
+        out.triangles.clear();
+        for &[first, count] in &ranges {
+            out.triangles
+                .extend_from_slice(&h.triangles[first as usize..(first + count) as usize]);
+        }
+        h.cut_borders(state, &m.borders, &mut out.borders);
+        out.arcs = Some(CutRanges {
+            patch: m.clone(),
+            ranges,
+        });
     }
     out.eps_target = eps;
     out.resolution = Resolution { nu: 1, nv: 1 };
