@@ -44,7 +44,7 @@ enum Command {
 
 #[derive(Args, Debug)]
 struct ViewArgs {
-    /// Model file (.bpt, .step, .stp).
+    /// Model file (.bpt, .step, .stp, .glb, .gltf, .obj, .ply).
     file: PathBuf,
     /// Window size.
     #[arg(long, default_value = "1024x768", value_parser = parse_size)]
@@ -72,7 +72,7 @@ struct ViewArgs {
 
 #[derive(Args, Debug)]
 struct BenchArgs {
-    /// Model file (.bpt, .step, .stp).
+    /// Model file (.bpt, .step, .stp, .glb, .gltf, .obj, .ply).
     file: PathBuf,
     /// Run the fly-through: orbit, zoom in close, a sudden jump, then still.
     #[arg(long)]
@@ -98,6 +98,10 @@ struct BenchArgs {
     /// Skip the per-frame crack measurement (it renders a reference; not timed either way).
     #[arg(long)]
     no_cracks: bool,
+    /// Mesh patches: upload every new cut's triangles instead of drawing index ranges of
+    /// static per-patch buffers (for comparison).
+    #[arg(long)]
+    upload_cuts: bool,
     /// Per-frame CSV.
     #[arg(long, default_value = "flythrough.csv")]
     csv: PathBuf,
@@ -108,7 +112,7 @@ struct BenchArgs {
 
 #[derive(Args, Debug)]
 struct ExportArgs {
-    /// Model file (.bpt, .step, .stp).
+    /// Model file (.bpt, .step, .stp, .glb, .gltf, .obj, .ply).
     file: PathBuf,
     /// Output .glb file.
     #[arg(short, long)]
@@ -145,7 +149,7 @@ struct CameraArgs {
 
 #[derive(Args, Debug)]
 struct RenderArgs {
-    /// Model file (.bpt, .step, .stp).
+    /// Model file (.bpt, .step, .stp, .glb, .gltf, .obj, .ply).
     file: PathBuf,
     /// Output PNG.
     #[arg(short, long)]
@@ -670,6 +674,7 @@ fn cmd_bench(args: &BenchArgs) -> Result<bool, CliError> {
     }
     let scene = load(&args.file)?;
     let mut renderer = Renderer::new()?;
+    renderer.static_arcs = !args.upload_cuts;
     eprintln!("adapter: {}", renderer.gpu().describe());
     let opts = FlythroughOptions {
         frames: args.frames,

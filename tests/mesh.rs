@@ -117,6 +117,44 @@ fn obj_polygons_are_triangulated() {
 }
 
 #[test]
+fn ply_ascii_and_binary_load() {
+    let scene = load(&data("quad.ply")).expect("ascii loads");
+    let patches = mesh_patches(&scene);
+    assert_eq!(patches.iter().map(|p| p.triangles.len()).sum::<usize>(), 2);
+    assert_eq!(patches[0].borders.len(), 1);
+    assert_eq!(patches[0].borders[0].len(), 4);
+    let scene = load(&data("tetra_le.ply")).expect("binary loads");
+    let patches = mesh_patches(&scene);
+    assert_eq!(patches.iter().map(|p| p.triangles.len()).sum::<usize>(), 4);
+    // A closed tetrahedron in one patch: no border.
+    assert_eq!(patches.len(), 1);
+    assert!(patches[0].borders.is_empty());
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(200))]
+    /// Any bytes after a valid binary header: an error or a mesh, never a panic.
+    #[test]
+    fn ply_with_arbitrary_payload_never_panics(
+        body in proptest::collection::vec(proptest::prelude::any::<u8>(), 0..200),
+        cut in 0usize..120,
+    ) {
+        let good = std::fs::read(data("tetra_le.ply")).expect("fixture");
+        let header_len = good.windows(11).position(|w| w == b"end_header\n").expect("header") + 11;
+        let mut bytes = good[..header_len.min(good.len())].to_vec();
+        bytes.extend_from_slice(&body);
+        let dir = common::scratch("ply-fuzz");
+        std::fs::create_dir_all(&dir).expect("scratch");
+        let path = dir.join(format!("case-{cut}.ply"));
+        std::fs::write(&path, &bytes).expect("write");
+        let _ = patchwork::io::mesh::read_ply(&path);
+        // Header mutations too: truncated anywhere.
+        std::fs::write(&path, &good[..cut.min(good.len())]).expect("write");
+        let _ = patchwork::io::mesh::read_ply(&path);
+    }
+}
+
+#[test]
 fn bad_mesh_files_are_typed_errors_naming_the_file() {
     let cases: &[(&str, &str)] = &[
         ("index_out_of_range.gltf", "index 5 is out of range"),
@@ -128,6 +166,14 @@ fn bad_mesh_files_are_typed_errors_naming_the_file() {
         ("nan.obj", "non-finite"),
         ("empty.obj", "no faces"),
         ("missing.glb", "cannot read"),
+        ("bad_index.ply", "index 7 is out of range"),
+        ("negative_index.ply", "index -1 is negative"),
+        ("nan.ply", "non-finite"),
+        ("no_faces.ply", "no faces"),
+        ("two_corners.ply", "face 0 has 2 corners"),
+        ("huge_count.ply", "more than the file's"),
+        ("garbage.ply", "not a valid PLY"),
+        ("truncated.ply", "not a valid PLY"),
     ];
     for (file, why) in cases {
         let path = data(file);

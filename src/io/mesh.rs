@@ -1,6 +1,6 @@
 //! Triangle-mesh readers: glTF 2.0 (`.glb`, `.gltf`; every mesh primitive of every node in
 //! the default scene, node transforms applied) with the `gltf` crate, and Wavefront OBJ with
-//! `tobj`. The result is welded into one world-space [`TriMesh`] and split into patches
+//! `tobj`, PLY with `ply-rs`. The result is welded into one world-space [`TriMesh`] and split into patches
 //! ([`crate::model::mesh::partition`]).
 
 use std::path::Path;
@@ -154,6 +154,121 @@ pub fn read_obj(path: &Path) -> Result<TriMesh, LoadError> {
             Mat4::IDENTITY,
         )?;
     }
+    if mesh.triangles.is_empty() {
+        return Err(LoadError::NoFaces {
+            path: path.to_path_buf(),
+            reason: "no faces".into(),
+        });
+    }
+    Ok(mesh)
+}
+
+/// Reads the faces of a PLY file (ASCII or binary, with `ply-rs`): the `x`, `y`, `z` of every
+/// `vertex` and the `vertex_indices` (or `vertex_index`) list of every `face`; polygons are
+/// triangulated as fans. Element counts larger than the file could hold are refused before
+/// anything is allocated, and a panic inside the parser becomes an error.
+pub fn read_ply(path: &Path) -> Result<TriMesh, LoadError> {
+    use ply_rs::ply::{DefaultElement, Property};
+    let unreadable = |reason: String| LoadError::Unreadable {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    if !bytes.starts_with(b"ply") {
+        return Err(unreadable("not a PLY file (it does not start with \"ply\")".into()));
+    }
+    // Every element takes at least one byte of the file, in any format.
+    let header_end = bytes
+        .windows(10)
+        .position(|w| w == b"end_header")
+        .ok_or_else(|| unreadable("the PLY header has no end_header".into()))?;
+    let header = String::from_utf8_lossy(&bytes[..header_end]);
+    for line in header.lines() {
+        let words: Vec<&str> = line.split_whitespace().collect();
+        if words.first() == Some(&"element") {
+            let count: u64 = words.get(2).and_then(|c| c.parse().ok()).ok_or_else(|| {
+                unreadable(format!("bad element line in the header: {line:?}"))
+            })?;
+            if count > bytes.len() as u64 {
+                return Err(unreadable(format!(
+                    "the header declares {count} {} elements, more than the file's {} bytes could hold",
+                    words.get(1).unwrap_or(&"?"),
+                    bytes.len()
+                )));
+            }
+        }
+    }
+    let parser = ply_rs::parser::Parser::<DefaultElement>::new();
+    let ply = crate::isolate::isolated(|| parser.read_ply(&mut &bytes[..]))
+        .map_err(|e| unreadable(format!("not a valid PLY file: {e}")))?
+        .map_err(|e| unreadable(format!("not a valid PLY file: {e}")))?;
+    let scalar = |p: &Property| -> Option<f64> {
+        Some(match *p {
+            Property::Char(x) => x as f64,
+            Property::UChar(x) => x as f64,
+            Property::Short(x) => x as f64,
+            Property::UShort(x) => x as f64,
+            Property::Int(x) => x as f64,
+            Property::UInt(x) => x as f64,
+            Property::Float(x) => x as f64,
+            Property::Double(x) => x,
+            _ => return None,
+        })
+    };
+    let list = |p: &Property| -> Option<Vec<i64>> {
+        Some(match p {
+            Property::ListChar(v) => v.iter().map(|&x| x as i64).collect(),
+            Property::ListUChar(v) => v.iter().map(|&x| x as i64).collect(),
+            Property::ListShort(v) => v.iter().map(|&x| x as i64).collect(),
+            Property::ListUShort(v) => v.iter().map(|&x| x as i64).collect(),
+            Property::ListInt(v) => v.iter().map(|&x| x as i64).collect(),
+            Property::ListUInt(v) => v.iter().map(|&x| x as i64).collect(),
+            _ => return None,
+        })
+    };
+    let vertices = ply
+        .payload
+        .get("vertex")
+        .ok_or_else(|| unreadable("no vertex element".into()))?;
+    let mut positions = Vec::with_capacity(vertices.len());
+    for (k, v) in vertices.iter().enumerate() {
+        let mut xyz = [0f32; 3];
+        for (c, name) in xyz.iter_mut().zip(["x", "y", "z"]) {
+            *c = v.get(name).and_then(scalar).ok_or_else(|| {
+                unreadable(format!("vertex {k} has no numeric property {name:?}"))
+            })? as f32;
+        }
+        positions.push(Vec3::from(xyz));
+    }
+    let mut indices = Vec::new();
+    for (k, f) in ply.payload.get("face").into_iter().flatten().enumerate() {
+        let corners = f
+            .get("vertex_indices")
+            .or_else(|| f.get("vertex_index"))
+            .and_then(list)
+            .ok_or_else(|| unreadable(format!("face {k} has no vertex_indices list")))?;
+        if corners.len() < 3 {
+            return Err(unreadable(format!(
+                "face {k} has {} corners, a face needs 3 or more",
+                corners.len()
+            )));
+        }
+        let corner = |i: i64| {
+            u32::try_from(i).map_err(|_| unreadable(format!("face {k}: index {i} is negative")))
+        };
+        for j in 1..corners.len() - 1 {
+            indices.extend([
+                corner(corners[0])?,
+                corner(corners[j])?,
+                corner(corners[j + 1])?,
+            ]);
+        }
+    }
+    let mut mesh = TriMesh::default();
+    append(path, "PLY", &mut mesh, &positions, &indices, Mat4::IDENTITY)?;
     if mesh.triangles.is_empty() {
         return Err(LoadError::NoFaces {
             path: path.to_path_buf(),

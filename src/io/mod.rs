@@ -151,12 +151,14 @@ pub fn load(path: &Path) -> Result<Scene, LoadError> {
             source,
         })?;
         step::parse(&bytes, path)
-    } else if ["glb", "gltf", "obj"]
+    } else if ["glb", "gltf", "obj", "ply"]
         .iter()
         .any(|e| extension.eq_ignore_ascii_case(e))
     {
         let mesh = if extension.eq_ignore_ascii_case("obj") {
             mesh::read_obj(path)?
+        } else if extension.eq_ignore_ascii_case("ply") {
+            mesh::read_ply(path)?
         } else {
             mesh::read_gltf(path)?
         };
