@@ -8,6 +8,7 @@
 //! Data flows one way: `io` → `model` → `tessellate` → `render`; `view` converts pixel errors
 //! to object errors in one place; `check` measures rendered images (cracks, growth, goldens).
 
+pub mod anim;
 pub mod check;
 pub mod geom;
 pub mod io;

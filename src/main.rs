@@ -40,6 +40,63 @@ enum Command {
     Bench(BenchArgs),
     /// Interactive viewer (needs a display; `xvfb-run -a` gives a virtual one).
     View(ViewArgs),
+    /// Animate parts (or patches) flying together (or apart): numbered PNGs, an animated GIF,
+    /// and an MP4 when `ffmpeg` is on the PATH.
+    Implode(ImplodeArgs),
+}
+
+#[derive(Args, Debug)]
+struct ImplodeArgs {
+    /// Model file (.bpt, .step, .stp, .glb, .gltf, .obj, .ply).
+    file: PathBuf,
+    /// Output folder (created if missing): frame-0000.png, …, implode.gif (explode.gif), and
+    /// frames.csv with every frame's figures.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Number of frames.
+    #[arg(long, default_value_t = 48)]
+    frames: usize,
+    /// Explode (assembled → apart) instead of implode (apart → assembled).
+    #[arg(long)]
+    explode: bool,
+    /// What moves as one: parts (each placed part of an assembly) or patches.
+    #[arg(long, default_value = "parts")]
+    by: patchwork::anim::GroupBy,
+    /// Flight distance at full explosion, × the model's radius.
+    #[arg(long, default_value_t = 1.0)]
+    distance: f64,
+    /// Frames per second of the GIF and MP4.
+    #[arg(long, default_value_t = 24)]
+    fps: u32,
+    /// Re-tessellation time budget per frame, milliseconds.
+    #[arg(long, default_value_t = 40.0)]
+    budget_ms: f64,
+    /// Write no GIF.
+    #[arg(long)]
+    no_gif: bool,
+    /// Write no MP4 even when ffmpeg is found.
+    #[arg(long)]
+    no_mp4: bool,
+    /// Count crack and growth pixels in every frame (against the moved watertight reference).
+    #[arg(long)]
+    check: bool,
+    /// With --check: write check images and crack masks of frames with cracks or growth here.
+    #[arg(long, requires = "check")]
+    save_failures: Option<PathBuf>,
+    #[command(flatten)]
+    camera: CameraArgs,
+    /// lit, flat or ids.
+    #[arg(long, default_value = "lit")]
+    shading: Shading,
+    /// Background colour R,G,B (0–255).
+    #[arg(long, default_value = "255,255,255", value_parser = parse_rgb)]
+    background: [u8; 3],
+    /// Fat-border variant: off, 6, 4 or 2 displaced vertices per border vertex.
+    #[arg(long, default_value = "6")]
+    fat_borders: FatBorders,
+    /// Samples per pixel: 1 or 4.
+    #[arg(long, default_value_t = 4, value_parser = parse_msaa)]
+    msaa: u32,
 }
 
 #[derive(Args, Debug)]
@@ -403,6 +460,223 @@ fn cmd_render(args: &RenderArgs) -> Result<(), CliError> {
         t_render.as_secs_f64() * 1e3
     );
     Ok(())
+}
+
+fn cmd_implode(args: &ImplodeArgs) -> Result<bool, CliError> {
+    use patchwork::anim::{AnimOptions, Explosion, run};
+    use patchwork::lod::LodOptions;
+    if args.frames == 0 {
+        return Err("--frames must be at least 1".into());
+    }
+    if !(args.distance.is_finite() && args.distance >= 0.0) {
+        return Err(format!("--distance must be a number ≥ 0, not {}", args.distance).into());
+    }
+    if args.fps == 0 {
+        return Err("--fps must be at least 1".into());
+    }
+    if !(args.budget_ms.is_finite() && args.budget_ms > 0.0) {
+        return Err(format!(
+            "--budget-ms must be a positive number, not {}",
+            args.budget_ms
+        )
+        .into());
+    }
+    let scene = load(&args.file)?;
+    // Frame the whole flight: the view holds every frame.
+    let explosion = Explosion::new(&scene, args.by, args.distance);
+    let mut framing = scene.clone();
+    framing.bounds = explosion.bounds(&scene);
+    let view = make_view(&framing, &args.camera)?;
+    std::fs::create_dir_all(&args.output)
+        .map_err(|e| format!("{}: cannot create the folder: {e}", args.output.display()))?;
+    let mut renderer = Renderer::new()?;
+    eprintln!("adapter: {}", renderer.gpu().describe());
+    let opts = AnimOptions {
+        frames: args.frames,
+        explode: args.explode,
+        by: args.by,
+        distance: args.distance,
+        lod: LodOptions {
+            pixel_error: args.camera.pixel_error,
+            budget: std::time::Duration::from_secs_f64(args.budget_ms / 1e3),
+            ..LodOptions::default()
+        },
+        render: RenderOptions {
+            shading: args.shading,
+            background: args.background,
+            fat_borders: args.fat_borders,
+            msaa: args.msaa,
+            depth: false,
+            ..RenderOptions::default()
+        },
+        check: args.check,
+        save_failures: args.save_failures.clone(),
+    };
+    if let Some(dir) = &args.save_failures {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| format!("{}: cannot create the folder: {e}", dir.display()))?;
+    }
+    let name = if args.explode { "explode" } else { "implode" };
+    let mut gif = if args.no_gif {
+        None
+    } else {
+        let delay = (1000 / args.fps).max(10);
+        Some(png::GifWriter::create(
+            &args.output.join(format!("{name}.gif")),
+            delay,
+        )?)
+    };
+    let pb = ProgressBar::new(args.frames as u64);
+    pb.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} frames {elapsed}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let mut write_error: Option<CliError> = None;
+    let records = run(&mut renderer, &scene, &view, &opts, |r, frame| {
+        let img = frame.to_rgba_image();
+        let path = args.output.join(format!("frame-{:04}.png", r.frame));
+        let written = png::write_rgba(&path, &img)
+            .and_then(|()| gif.as_mut().map_or(Ok(()), |g| g.add(&img)));
+        if let Err(e) = written
+            && write_error.is_none()
+        {
+            write_error = Some(e.into());
+        }
+        pb.inc(1);
+        Ok(())
+    })?;
+    pb.finish_and_clear();
+    if let Some(e) = write_error {
+        return Err(e);
+    }
+    if let Some(g) = gif {
+        g.finish()?;
+    }
+    let mp4 = if args.no_mp4 {
+        None
+    } else {
+        write_mp4(&args.output, name, args.fps)?
+    };
+    let mut csv = String::from(
+        "frame,amount,frame_ms,tessellation_ms,retessellated,triangles,max_error_px,crack_pixels,growth_pixels,growth_max_px\n",
+    );
+    for r in &records {
+        let (cracks, growth, growth_max) =
+            r.cracks
+                .map_or((String::new(), String::new(), String::new()), |c| {
+                    (
+                        c.cracks().to_string(),
+                        c.growth.to_string(),
+                        c.growth_max_px.to_string(),
+                    )
+                });
+        csv.push_str(&format!(
+            "{},{:.4},{:.3},{:.3},{},{},{:.3},{cracks},{growth},{growth_max}\n",
+            r.frame,
+            r.amount,
+            r.frame_ms,
+            r.tessellation_ms,
+            r.retessellated,
+            r.triangles,
+            r.max_error_px
+        ));
+    }
+    png::write_text(&args.output.join("frames.csv"), &csv)?;
+    let n = records.len() as f64;
+    let total_ms: f64 = records.iter().map(|r| r.frame_ms).sum();
+    let mut ms: Vec<f64> = records.iter().map(|r| r.frame_ms).collect();
+    ms.sort_by(f64::total_cmp);
+    println!(
+        "{name} of {} by {:?}: {} groups, {} frames at {}x{} — {:.1} frames per second (mean {:.1} ms, p50 {:.1} ms, max {:.1} ms per frame: frame loop, upload, draw; PNG writing not counted)",
+        args.file.display(),
+        args.by,
+        explosion.groups,
+        records.len(),
+        view.width,
+        view.height,
+        1e3 * n / total_ms.max(1e-9),
+        total_ms / n,
+        ms[ms.len() / 2],
+        ms[ms.len() - 1]
+    );
+    println!(
+        "wrote {}/frame-0000.png … frame-{:04}.png{}{}",
+        args.output.display(),
+        records.len() - 1,
+        if args.no_gif {
+            String::new()
+        } else {
+            format!(", {name}.gif")
+        },
+        mp4.map_or(String::new(), |p| format!(", {}", p.display()))
+    );
+    let mut ok = true;
+    if args.check {
+        use patchwork::anim::{frames_pass, growth_bound_px};
+        let counts: Vec<_> = records.iter().filter_map(|r| r.cracks).collect();
+        let cracks: usize = counts.iter().map(|c| c.cracks()).sum();
+        let worst = counts.iter().map(|c| c.growth_max_px).max().unwrap_or(0);
+        let last = counts.last().map_or(0, |c| c.cracks());
+        println!(
+            "crack pixels: {cracks} in all frames, {} frames with any, {last} in the last frame; growth at most {worst} px out (bound {} px)",
+            counts.iter().filter(|c| c.cracks() > 0).count(),
+            growth_bound_px(args.by, args.camera.pixel_error)
+        );
+        ok = frames_pass(&records, args.by, args.camera.pixel_error);
+        if !ok {
+            eprintln!(
+                "check failed: {}",
+                match args.by {
+                    patchwork::anim::GroupBy::Parts =>
+                        "moving parts must be crack-free in every frame, growth within the bound",
+                    patchwork::anim::GroupBy::Patches =>
+                        "the assembled frame must be crack-free, growth within the bound in every frame",
+                }
+            );
+        }
+    }
+    Ok(ok)
+}
+
+/// Encodes `dir/frame-%04d.png` as `dir/NAME.mp4` (H.264, via a temporary name) when an
+/// `ffmpeg` binary is on the PATH; says so and returns `None` when there is none.
+fn write_mp4(dir: &Path, name: &str, fps: u32) -> Result<Option<PathBuf>, CliError> {
+    let found = std::process::Command::new("ffmpeg")
+        .arg("-version")
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success());
+    if !found {
+        eprintln!("note: no ffmpeg on the PATH, so no MP4 (the PNGs and the GIF are written)");
+        return Ok(None);
+    }
+    let out = dir.join(format!("{name}.mp4"));
+    let tmp = dir.join(format!(".{name}.{}.tmp.mp4", std::process::id()));
+    let status = std::process::Command::new("ffmpeg")
+        .args(["-y", "-loglevel", "error", "-framerate"])
+        .arg(fps.to_string())
+        .arg("-i")
+        .arg(dir.join("frame-%04d.png"))
+        .args([
+            "-vf",
+            "pad=ceil(iw/2)*2:ceil(ih/2)*2",
+            "-pix_fmt",
+            "yuv420p",
+        ])
+        .arg(&tmp)
+        .status()
+        .map_err(|e| format!("ffmpeg: {e}"))?;
+    if !status.success() {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(format!(
+            "ffmpeg failed ({status}); the PNGs are in {}",
+            dir.display()
+        )
+        .into());
+    }
+    std::fs::rename(&tmp, &out).map_err(|e| format!("{}: {e}", out.display()))?;
+    Ok(Some(out))
 }
 
 fn cmd_export(args: &ExportArgs) -> Result<(), CliError> {
@@ -819,6 +1093,7 @@ fn main() -> ExitCode {
         Command::Export(a) => cmd_export(a).map(|()| true),
         Command::Bench(a) => cmd_bench(a),
         Command::View(a) => cmd_view(a).map(|()| true),
+        Command::Implode(a) => cmd_implode(a),
     };
     match result {
         Ok(true) => ExitCode::SUCCESS,

@@ -262,3 +262,69 @@ fn no_adapter_fails_with_what_to_install() {
     );
     assert!(!out.exists());
 }
+
+#[test]
+fn implode_writes_numbered_frames_a_gif_and_a_csv() {
+    let dir = common::scratch("cli-implode");
+    let _ = std::fs::remove_dir_all(&dir);
+    let o = patchwork(&[
+        "implode",
+        &teapot(),
+        "-o",
+        s(&dir),
+        "--frames",
+        "5",
+        "--by",
+        "patches",
+        "--size",
+        "160x120",
+        "--check",
+        "--no-mp4",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("frames per second"), "{stdout}");
+    assert!(stdout.contains("crack pixels"), "{stdout}");
+    for k in 0..5 {
+        let img = image::open(dir.join(format!("frame-{k:04}.png"))).expect("frame");
+        assert_eq!((img.width(), img.height()), (160, 120));
+    }
+    assert!(!dir.join("frame-0005.png").exists());
+    let first = image::open(dir.join("frame-0000.png"))
+        .expect("first")
+        .to_rgba8();
+    let last = image::open(dir.join("frame-0004.png"))
+        .expect("last")
+        .to_rgba8();
+    assert_ne!(first, last, "the patches move");
+    let gif = std::fs::read(dir.join("implode.gif")).expect("gif");
+    assert!(gif.starts_with(b"GIF89a"));
+    let csv = std::fs::read_to_string(dir.join("frames.csv")).expect("csv");
+    assert_eq!(csv.lines().count(), 6, "{csv}");
+    // No temporary files left behind.
+    for entry in std::fs::read_dir(&dir).expect("dir") {
+        let name = entry.expect("entry").file_name();
+        assert!(!name.to_string_lossy().starts_with('.'), "{name:?}");
+    }
+}
+
+#[test]
+fn implode_rejects_bad_arguments() {
+    let dir = common::scratch("cli-implode-bad");
+    for (args, why) in [
+        (vec!["--frames", "0"], "--frames"),
+        (vec!["--distance=-1"], "--distance"),
+        (vec!["--by", "atoms"], "parts or patches"),
+        (vec!["--fps", "0"], "--fps"),
+    ] {
+        let mut all = vec!["implode", "models/teapot.bpt", "-o", s(&dir)];
+        all.extend(args);
+        let o = Command::new(env!("CARGO_BIN_EXE_patchwork"))
+            .current_dir(common::root())
+            .args(&all)
+            .output()
+            .expect("runs");
+        assert_eq!(o.status.code(), Some(2), "{all:?}");
+        assert!(stderr(&o).contains(why), "{all:?}: {}", stderr(&o));
+    }
+}

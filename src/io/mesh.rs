@@ -178,7 +178,9 @@ pub fn read_ply(path: &Path) -> Result<TriMesh, LoadError> {
         source,
     })?;
     if !bytes.starts_with(b"ply") {
-        return Err(unreadable("not a PLY file (it does not start with \"ply\")".into()));
+        return Err(unreadable(
+            "not a PLY file (it does not start with \"ply\")".into(),
+        ));
     }
     // Every element takes at least one byte of the file, in any format.
     let header_end = bytes
@@ -189,9 +191,10 @@ pub fn read_ply(path: &Path) -> Result<TriMesh, LoadError> {
     for line in header.lines() {
         let words: Vec<&str> = line.split_whitespace().collect();
         if words.first() == Some(&"element") {
-            let count: u64 = words.get(2).and_then(|c| c.parse().ok()).ok_or_else(|| {
-                unreadable(format!("bad element line in the header: {line:?}"))
-            })?;
+            let count: u64 = words
+                .get(2)
+                .and_then(|c| c.parse().ok())
+                .ok_or_else(|| unreadable(format!("bad element line in the header: {line:?}")))?;
             if count > bytes.len() as u64 {
                 return Err(unreadable(format!(
                     "the header declares {count} {} elements, more than the file's {} bytes could hold",
@@ -237,9 +240,10 @@ pub fn read_ply(path: &Path) -> Result<TriMesh, LoadError> {
     for (k, v) in vertices.iter().enumerate() {
         let mut xyz = [0f32; 3];
         for (c, name) in xyz.iter_mut().zip(["x", "y", "z"]) {
-            *c = v.get(name).and_then(scalar).ok_or_else(|| {
-                unreadable(format!("vertex {k} has no numeric property {name:?}"))
-            })? as f32;
+            *c =
+                v.get(name).and_then(scalar).ok_or_else(|| {
+                    unreadable(format!("vertex {k} has no numeric property {name:?}"))
+                })? as f32;
         }
         positions.push(Vec3::from(xyz));
     }

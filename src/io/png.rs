@@ -110,6 +110,95 @@ pub fn write_gray16(
     write_png(path, image)
 }
 
+/// An animated GIF written frame by frame to a temporary name and renamed by
+/// [`GifWriter::finish`]; dropped unfinished, it removes the temporary file.
+pub struct GifWriter {
+    path: PathBuf,
+    tmp: PathBuf,
+    encoder: Option<image::codecs::gif::GifEncoder<std::io::BufWriter<std::fs::File>>>,
+    delay_ms: u32,
+}
+
+impl GifWriter {
+    /// Starts `path`, showing every frame for `delay_ms` and looping forever.
+    pub fn create(path: &Path, delay_ms: u32) -> Result<GifWriter, WriteError> {
+        let tmp = temp_name(path);
+        let file = std::fs::File::create(&tmp).map_err(|source| WriteError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+        // Speed 10 of 30: NeuQuant sampling every 10th pixel, a good trade for renders.
+        let mut encoder =
+            image::codecs::gif::GifEncoder::new_with_speed(std::io::BufWriter::new(file), 10);
+        let mut writer = GifWriter {
+            path: path.to_owned(),
+            tmp,
+            encoder: None,
+            delay_ms,
+        };
+        encoder
+            .set_repeat(image::codecs::gif::Repeat::Infinite)
+            .map_err(|e| encode_err(path, e))?;
+        writer.encoder = Some(encoder);
+        Ok(writer)
+    }
+
+    /// Appends a frame.
+    pub fn add(&mut self, image: &image::RgbaImage) -> Result<(), WriteError> {
+        let (width, height) = image.dimensions();
+        if width == 0 || height == 0 {
+            return Err(WriteError::EmptyImage {
+                path: self.path.clone(),
+                width,
+                height,
+            });
+        }
+        let Some(encoder) = self.encoder.as_mut() else {
+            return Ok(());
+        };
+        let frame = image::Frame::from_parts(
+            image.clone(),
+            0,
+            0,
+            image::Delay::from_numer_denom_ms(self.delay_ms, 1),
+        );
+        encoder
+            .encode_frame(frame)
+            .map_err(|e| encode_err(&self.path, e))
+    }
+
+    /// Ends the file (the encoder writes the trailer and flushes when dropped), makes sure it
+    /// reached the disk and renames it to its final name.
+    pub fn finish(mut self) -> Result<(), WriteError> {
+        drop(self.encoder.take());
+        let io = |source| WriteError::Io {
+            path: self.path.clone(),
+            source,
+        };
+        std::fs::File::open(&self.tmp)
+            .and_then(|f| f.sync_all())
+            .map_err(io)?;
+        std::fs::rename(&self.tmp, &self.path).map_err(io)
+    }
+}
+
+impl std::fmt::Debug for GifWriter {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("GifWriter")
+            .field("path", &self.path)
+            .field("delay_ms", &self.delay_ms)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Drop for GifWriter {
+    fn drop(&mut self) {
+        // Unfinished (or failed): leave nothing behind.
+        self.encoder.take();
+        let _ = std::fs::remove_file(&self.tmp);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -134,6 +223,41 @@ mod tests {
             write_rgba(&path, &img),
             Err(WriteError::EmptyImage { .. })
         ));
+    }
+
+    #[test]
+    fn gif_is_written_whole_or_not_at_all() {
+        let dir = std::env::temp_dir().join(format!("patchwork-gif-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("dir");
+        let path = dir.join("a.gif");
+        let mut gif = GifWriter::create(&path, 40).expect("create");
+        for k in 0..3u8 {
+            gif.add(&image::RgbaImage::from_pixel(
+                4,
+                3,
+                image::Rgba([k * 80, 0, 0, 255]),
+            ))
+            .expect("frame");
+        }
+        assert!(!path.exists(), "visible before finish");
+        gif.finish().expect("finish");
+        let frames = {
+            use image::AnimationDecoder;
+            let file = std::io::BufReader::new(std::fs::File::open(&path).expect("open"));
+            image::codecs::gif::GifDecoder::new(file)
+                .expect("decode")
+                .into_frames()
+                .count()
+        };
+        assert_eq!(frames, 3);
+        // Dropped unfinished: nothing.
+        let other = dir.join("b.gif");
+        let mut gif = GifWriter::create(&other, 40).expect("create");
+        gif.add(&image::RgbaImage::new(4, 3)).expect("frame");
+        drop(gif);
+        assert!(!other.exists());
+        assert_eq!(std::fs::read_dir(&dir).expect("dir").count(), 1);
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]

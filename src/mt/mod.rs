@@ -540,8 +540,7 @@ impl Reducer {
         let touching = pairs
             .iter()
             .filter(|(a, b)| {
-                let verts: IntSet<u32> =
-                    a.iter().flat_map(|&t| h.triangles[t as usize]).collect();
+                let verts: IntSet<u32> = a.iter().flat_map(|&t| h.triangles[t as usize]).collect();
                 b.iter()
                     .any(|&t| h.triangles[t as usize].iter().any(|v| verts.contains(v)))
             })
@@ -1284,7 +1283,10 @@ mod tests {
             }
             // Arcs are contiguous and in the triangle order.
             assert_eq!(h.arc_start.len(), h.arc_count() + 1);
-            assert_eq!(*h.arc_start.last().unwrap() as usize, h.triangles.len());
+            assert_eq!(
+                *h.arc_start.last().expect("the end of the last arc") as usize,
+                h.triangles.len()
+            );
             for k in 0..h.arc_count() {
                 for t in h.arc_start[k]..h.arc_start[k + 1] {
                     let t = t as usize;
