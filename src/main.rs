@@ -122,9 +122,22 @@ struct ViewArgs {
     #[arg(long, requires = "frames")]
     screenshot: Option<PathBuf>,
     /// With --frames: keys pressed one per frame from the first, comma-separated
-    /// (e.g. `h,+` or `b,b,w`; names: characters, left, right, up, down, pageup, pagedown).
+    /// (e.g. `h,+` or `b,b,w`; names: characters, left, right, up, down, pageup, pagedown,
+    /// space).
     #[arg(long, requires = "frames", value_delimiter = ',')]
     keys: Vec<String>,
+    /// Play an implosion/explosion loop (space pauses and resumes).
+    #[arg(long)]
+    implode: bool,
+    /// With --implode: parts or patches move.
+    #[arg(long, default_value = "parts", requires = "implode")]
+    by: patchwork::anim::GroupBy,
+    /// With --implode: flight distance, × the model's radius.
+    #[arg(long, default_value_t = 1.0, requires = "implode")]
+    distance: f64,
+    /// With --implode: frames per implosion.
+    #[arg(long, default_value_t = 60, requires = "implode")]
+    implode_frames: usize,
 }
 
 #[derive(Args, Debug)]
@@ -1044,6 +1057,9 @@ fn cmd_view(args: &ViewArgs) -> Result<(), CliError> {
     if args.frames == Some(0) {
         return Err("--frames must be at least 1".into());
     }
+    if !(args.distance.is_finite() && args.distance >= 0.0) {
+        return Err(format!("--distance must be a number ≥ 0, not {}", args.distance).into());
+    }
     if let Some(k) = args
         .keys
         .iter()
@@ -1075,6 +1091,11 @@ fn cmd_view(args: &ViewArgs) -> Result<(), CliError> {
             frames: args.frames,
             screenshot: args.screenshot.clone(),
             keys: args.keys.clone(),
+            implode: args.implode.then_some(patchwork::viewer::ViewerAnimation {
+                by: args.by,
+                distance: args.distance,
+                frames: args.implode_frames.max(2),
+            }),
         },
     )?;
     eprintln!(

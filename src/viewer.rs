@@ -11,8 +11,10 @@
 //! Mouse: left drag orbits, right drag (or shift + left) pans, wheel zooms. Keys: arrows orbit,
 //! PageUp/PageDown zoom, `f` fit to view, `b` fat borders off/6/4/2, `w` wireframe, `i` patch-ID
 //! colours, `h` error heat map (screen error per patch: blue finer than asked, green on target,
-//! red coarser), `+`/`-` pixel error ×2 / ÷2, `p` screenshot, `q`/Esc quit. The title shows fps,
-//! triangles, queue length and the largest screen error.
+//! red coarser), `+`/`-` pixel error ×2 / ÷2, `p` screenshot, space plays/pauses the
+//! implosion loop (`--implode`: parts or patches fly together, stay, fly apart, ... — see
+//! [`crate::anim`]), `q`/Esc quit. The title shows fps, triangles, queue length and the
+//! largest screen error.
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -63,6 +65,46 @@ pub struct ViewerOptions {
     pub screenshot: Option<PathBuf>,
     /// Keys pressed by script, one per frame from the first (names as in [`script_key`]).
     pub keys: Vec<String>,
+    /// Play an implosion/explosion loop (space pauses and resumes).
+    pub implode: Option<ViewerAnimation>,
+}
+
+/// The viewer's animation: the parts (or patches) fly together over `frames` frames, stay
+/// assembled a while, fly apart again, and so on.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ViewerAnimation {
+    pub by: crate::anim::GroupBy,
+    pub distance: f64,
+    /// Frames per implosion (and per explosion).
+    pub frames: usize,
+}
+
+/// A playing (or paused) animation.
+struct Playing {
+    explosion: crate::anim::Explosion,
+    frames: usize,
+    /// Frames since the start of the loop.
+    phase: usize,
+    paused: bool,
+}
+
+impl Playing {
+    /// Explosion amount now: imploding, a quarter of the time assembled, exploding, a
+    /// quarter apart.
+    fn amount(&self) -> f64 {
+        let n = self.frames.max(2);
+        let hold = n / 4;
+        let k = self.phase % (2 * (n + hold));
+        if k < n {
+            crate::anim::amount(k, n, false)
+        } else if k < n + hold {
+            0.0
+        } else if k < 2 * n + hold {
+            crate::anim::amount(k - n - hold, n, true)
+        } else {
+            1.0
+        }
+    }
 }
 
 /// The key a script name stands for: a character (`b`, `w`, `+`…) or `left`, `right`, `up`,
@@ -76,6 +118,7 @@ pub fn script_key(name: &str) -> Option<Key> {
         "pageup" => Key::Named(NamedKey::PageUp),
         "pagedown" => Key::Named(NamedKey::PageDown),
         "escape" => Key::Named(NamedKey::Escape),
+        "space" => Key::Named(NamedKey::Space),
         c if c.chars().count() == 1 => Key::Character(c.into()),
         _ => return None,
     })
@@ -222,11 +265,23 @@ pub fn draw_wireframe<'a>(
 }
 
 /// Opens the window and runs until it is closed (or the scripted frames are drawn).
-pub fn run(scene: Scene, options: ViewerOptions) -> Result<ViewerReport, ViewerError> {
+pub fn run(mut scene: Scene, options: ViewerOptions) -> Result<ViewerReport, ViewerError> {
     let event_loop = EventLoop::new().map_err(|e| ViewerError::NoDisplay(e.to_string()))?;
+    let playing = options.implode.map(|a| {
+        let explosion = crate::anim::Explosion::new(&scene, a.by, a.distance);
+        // Frame (and clip) the whole flight.
+        scene.bounds = explosion.bounds(&scene);
+        Playing {
+            explosion,
+            frames: a.frames,
+            phase: 0,
+            paused: false,
+        }
+    });
     let orbit = Orbit::fit(&scene, options.fov_y, options.size);
     let mut app = App {
         scene,
+        playing,
         options,
         orbit,
         state: None,
@@ -266,6 +321,8 @@ pub fn run(scene: Scene, options: ViewerOptions) -> Result<ViewerReport, ViewerE
 
 struct App {
     scene: Scene,
+    /// The implosion loop, with `--implode`.
+    playing: Option<Playing>,
     options: ViewerOptions,
     orbit: Orbit,
     state: Option<State>,
@@ -511,11 +568,23 @@ impl App {
             return Ok(false);
         };
         let start = Instant::now();
-        let stats = state.lod.update(&self.scene, &view);
+        // Animated: patches drawn moved, tessellated for where they are drawn.
+        let offsets = self
+            .playing
+            .as_ref()
+            .map(|p| p.explosion.at(p.amount()))
+            .filter(|o| o.iter().any(|v| *v != DVec3::ZERO));
+        let stats = match &offsets {
+            Some(o) => state
+                .lod
+                .update(&crate::anim::moved_scene(&self.scene, o), &view),
+            None => state.lod.update(&self.scene, &view),
+        };
         let generation = state.lod.generation();
-        if self.heat || state.gpu_meshes.as_ref().is_none_or(|g| g.0 != generation) {
+        let moving = offsets.is_some();
+        if self.heat || moving || state.gpu_meshes.as_ref().is_none_or(|g| g.0 != generation) {
             let asked = state.lod.options.pixel_error;
-            let meshes = if self.heat {
+            let mut meshes = if self.heat {
                 let errors = state.lod.patch_errors_px();
                 state
                     .lod
@@ -528,7 +597,15 @@ impl App {
             } else {
                 state.lod.meshes().cloned().collect()
             };
-            let gen_key = if self.heat { u64::MAX } else { generation };
+            if let Some(o) = &offsets {
+                let indices: Vec<usize> = state.lod.meshes_with_index().map(|(i, _)| i).collect();
+                meshes = crate::anim::translated(indices.into_iter().zip(meshes.iter()), o);
+            }
+            let gen_key = if self.heat || moving {
+                u64::MAX
+            } else {
+                generation
+            };
             state.gpu_meshes = Some((gen_key, state.renderer.upload(&meshes)));
         }
         let Some((_, gpu_meshes)) = state.gpu_meshes.as_ref() else {
@@ -587,7 +664,14 @@ impl App {
             self.last_title = Instant::now();
         }
         state.last = Some(frame);
-        Ok(stats.queue_left > 0 || stats.retessellated > 0)
+        let playing = match self.playing.as_mut() {
+            Some(p) if !p.paused => {
+                p.phase += 1;
+                true
+            }
+            _ => false,
+        };
+        Ok(stats.queue_left > 0 || stats.retessellated > 0 || playing)
     }
 
     fn screenshot(&mut self) -> Result<(), ViewerError> {
@@ -632,6 +716,11 @@ impl App {
                 }
             }
             Key::Character("w") => self.wireframe = !self.wireframe,
+            Key::Named(NamedKey::Space) => {
+                if let Some(p) = self.playing.as_mut() {
+                    p.paused = !p.paused;
+                }
+            }
             Key::Character("i") => {
                 self.shading = if self.shading == Shading::Ids {
                     Shading::Lit

@@ -72,6 +72,17 @@ impl Drop for Display {
 
 /// Runs `patchwork view` on the teapot for `frames` frames with `keys`, returns the last frame.
 fn view(display: &Display, name: &str, frames: usize, keys: &str) -> image::RgbaImage {
+    view_with(display, name, frames, keys, &[])
+}
+
+/// As [`view`], with more arguments.
+fn view_with(
+    display: &Display,
+    name: &str,
+    frames: usize,
+    keys: &str,
+    extra: &[&str],
+) -> image::RgbaImage {
     let out = common::scratch("viewer").join(format!("{name}.png"));
     let _ = std::fs::remove_file(&out);
     let model = common::root().join("models/teapot.bpt");
@@ -81,6 +92,7 @@ fn view(display: &Display, name: &str, frames: usize, keys: &str) -> image::Rgba
         .args(["--size", "400x300", "--frames", &frames.to_string()])
         .arg("--screenshot")
         .arg(&out)
+        .args(extra)
         .env("DISPLAY", &display.name)
         .env_remove("WAYLAND_DISPLAY");
     if !keys.is_empty() {
@@ -136,6 +148,35 @@ fn keys_switch_the_heat_map_and_patch_ids() {
     let ids = view(&display, "ids", 3, "i");
     let colours: std::collections::BTreeSet<[u8; 3]> = surface_pixels(&ids).collect();
     assert!(colours.len() >= 20, "{} colours", colours.len());
+}
+
+/// Bounding box (width, height) of the non-background pixels.
+fn extent(img: &image::RgbaImage) -> (u32, u32) {
+    let (mut x0, mut y0, mut x1, mut y1) = (u32::MAX, u32::MAX, 0, 0);
+    for (x, y, p) in img.enumerate_pixels() {
+        if [p.0[0], p.0[1], p.0[2]] != [255, 255, 255] {
+            (x0, y0, x1, y1) = (x0.min(x), y0.min(y), x1.max(x), y1.max(y));
+        }
+    }
+    (x1.saturating_sub(x0), y1.saturating_sub(y0))
+}
+
+#[test]
+fn implode_plays_and_space_pauses() {
+    let display = Display::open();
+    let args = ["--implode", "--by", "patches", "--implode-frames", "6"];
+    // Played: 6 frames of implosion, then assembled.
+    let played = view_with(&display, "implode-played", 8, "", &args);
+    // Paused at once: still exploded.
+    let paused = view_with(&display, "implode-paused", 8, "space", &args);
+    let (a, b) = (extent(&played), extent(&paused));
+    assert!(
+        b.0 > a.0 * 3 / 2 && b.1 > a.1 * 3 / 2,
+        "exploded {b:?} vs assembled {a:?}"
+    );
+    // Resumed after a pause: it plays on to the assembled teapot.
+    let resumed = view_with(&display, "implode-resumed", 9, "space,space", &args);
+    assert_eq!(extent(&resumed), a);
 }
 
 /// The X server's root window as RGB rows, read with `xwd` (ZPixmap, 24/32 bits per pixel).
