@@ -625,17 +625,21 @@ fn cmd_implode(args: &ImplodeArgs) -> Result<bool, CliError> {
     );
     let mut ok = true;
     if args.check {
-        use patchwork::anim::{frames_pass, growth_bound_px};
+        use patchwork::anim::{frames_pass, growth_within_bound};
         let counts: Vec<_> = records.iter().filter_map(|r| r.cracks).collect();
         let cracks: usize = counts.iter().map(|c| c.cracks()).sum();
         let worst = counts.iter().map(|c| c.growth_max_px).max().unwrap_or(0);
+        let most = counts.iter().map(|c| c.growth).max().unwrap_or(0);
         let last = counts.last().map_or(0, |c| c.cracks());
+        let pe = args.camera.pixel_error;
+        let bound = counts.first().map_or(String::new(), |c| {
+            growth_within_bound(c, args.by, explosion.groups, pe).0
+        });
         println!(
-            "crack pixels: {cracks} in all frames, {} frames with any, {last} in the last frame; growth at most {worst} px out (bound {} px)",
+            "crack pixels: {cracks} in all frames, {} frames with any, {last} in the last frame; growth at most {most} pixels a frame, at most {worst} px out (bound {bound})",
             counts.iter().filter(|c| c.cracks() > 0).count(),
-            growth_bound_px(args.by, args.camera.pixel_error)
         );
-        ok = frames_pass(&records, args.by, args.camera.pixel_error);
+        ok = frames_pass(&records, args.by, explosion.groups, pe);
         if !ok {
             eprintln!(
                 "check failed: {}",
