@@ -85,18 +85,8 @@ struct ImplodeArgs {
     save_failures: Option<PathBuf>,
     #[command(flatten)]
     camera: CameraArgs,
-    /// lit, flat or ids.
-    #[arg(long, default_value = "lit")]
-    shading: Shading,
-    /// Background colour R,G,B (0–255).
-    #[arg(long, default_value = "255,255,255", value_parser = parse_rgb)]
-    background: [u8; 3],
-    /// Fat-border variant: off, 6, 4 or 2 displaced vertices per border vertex.
-    #[arg(long, default_value = "6")]
-    fat_borders: FatBorders,
-    /// Samples per pixel: 1 or 4.
-    #[arg(long, default_value_t = 4, value_parser = parse_msaa)]
-    msaa: u32,
+    #[command(flatten)]
+    draw: DrawArgs,
 }
 
 #[derive(Args, Debug)]
@@ -217,15 +207,9 @@ struct CameraArgs {
     pixel_error: f64,
 }
 
-#[derive(Args, Debug)]
-struct RenderArgs {
-    /// Model file (.bpt, .step, .stp, .glb, .gltf, .obj, .ply).
-    file: PathBuf,
-    /// Output PNG.
-    #[arg(short, long)]
-    output: PathBuf,
-    #[command(flatten)]
-    camera: CameraArgs,
+/// How images are drawn (shared by `render` and `implode`).
+#[derive(Args, Debug, Clone, Copy)]
+struct DrawArgs {
     /// lit, flat or ids.
     #[arg(long, default_value = "lit")]
     shading: Shading,
@@ -238,6 +222,32 @@ struct RenderArgs {
     /// Samples per pixel: 1 or 4.
     #[arg(long, default_value_t = 4, value_parser = parse_msaa)]
     msaa: u32,
+}
+
+impl DrawArgs {
+    fn options(&self) -> RenderOptions {
+        RenderOptions {
+            shading: self.shading,
+            background: self.background,
+            fat_borders: self.fat_borders,
+            msaa: self.msaa,
+            depth: false,
+            ..RenderOptions::default()
+        }
+    }
+}
+
+#[derive(Args, Debug)]
+struct RenderArgs {
+    /// Model file (.bpt, .step, .stp, .glb, .gltf, .obj, .ply).
+    file: PathBuf,
+    /// Output PNG.
+    #[arg(short, long)]
+    output: PathBuf,
+    #[command(flatten)]
+    camera: CameraArgs,
+    #[command(flatten)]
+    draw: DrawArgs,
     /// Also write linear view-space depth as a 16-bit PNG (0 = near plane, 65535 = far plane).
     #[arg(long)]
     depth_out: Option<PathBuf>,
@@ -420,14 +430,7 @@ fn cmd_render(args: &RenderArgs) -> Result<(), CliError> {
     let mut renderer = Renderer::new()?;
     eprintln!("adapter: {}", renderer.gpu().describe());
     let gpu = renderer.upload(&meshes);
-    let opts = RenderOptions {
-        shading: args.shading,
-        background: args.background,
-        fat_borders: args.fat_borders,
-        msaa: args.msaa,
-        depth: false,
-        ..RenderOptions::default()
-    };
+    let opts = args.draw.options();
     let t1 = Instant::now();
     let frame = renderer.render(&gpu, &view, &opts)?;
     let t_render = t1.elapsed();
@@ -514,14 +517,7 @@ fn cmd_implode(args: &ImplodeArgs) -> Result<bool, CliError> {
             budget: std::time::Duration::from_secs_f64(args.budget_ms / 1e3),
             ..LodOptions::default()
         },
-        render: RenderOptions {
-            shading: args.shading,
-            background: args.background,
-            fat_borders: args.fat_borders,
-            msaa: args.msaa,
-            depth: false,
-            ..RenderOptions::default()
-        },
+        render: args.draw.options(),
         check: args.check,
         save_failures: args.save_failures.clone(),
     };
