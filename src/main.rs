@@ -651,7 +651,7 @@ fn cmd_implode(args: &ImplodeArgs) -> Result<bool, CliError> {
     Ok(ok)
 }
 
-/// Encodes `dir/frame-%04d.png` as `dir/NAME.mp4` (H.264, via a temporary name) when an
+/// Encodes `dir/frame-%04d.png` as `dir/NAME.mp4` (ffmpeg's default MP4 encoder, via a temporary name) when an
 /// `ffmpeg` binary is on the PATH; says so and returns `None` when there is none.
 fn write_mp4(dir: &Path, name: &str, fps: u32) -> Result<Option<PathBuf>, CliError> {
     let found = std::process::Command::new("ffmpeg")
