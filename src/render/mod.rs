@@ -140,6 +140,39 @@ struct SurfaceVertex {
     color: [u8; 4],
 }
 
+/// The surface vertices of one patch.
+fn surface_vertices<'a>(
+    positions: &'a [glam::Vec3],
+    normals: &'a [glam::Vec3],
+    patch_id: u32,
+    color: [u8; 4],
+) -> impl Iterator<Item = SurfaceVertex> + 'a {
+    positions
+        .iter()
+        .zip(normals)
+        .map(move |(p, n)| SurfaceVertex {
+            position: (*p).into(),
+            normal: (*n).into(),
+            patch_id,
+            color,
+        })
+}
+
+/// A buffer with `bytes`; empty buffers cannot be bound, so an empty one gets a few zeros.
+fn buffer_init(
+    device: &wgpu::Device,
+    label: &str,
+    bytes: &[u8],
+    usage: wgpu::BufferUsages,
+) -> wgpu::Buffer {
+    let pad = [0u8; 80];
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents: if bytes.is_empty() { &pad } else { bytes },
+        usage,
+    })
+}
+
 /// A patch colour as a vertex attribute (`Unorm8x4`): alpha 0 means "the default colour".
 pub(crate) fn packed_color(c: Option<[f32; 3]>) -> [u8; 4] {
     let q = |x: f32| (x.clamp(0.0, 1.0) * 255.0).round() as u8;
@@ -409,31 +442,16 @@ impl Renderer {
                 continue;
             }
             let base = vertices.len() as u32;
-            let color = packed_color(m.color);
-            vertices.extend(
-                m.positions
-                    .iter()
-                    .zip(&m.normals)
-                    .map(|(p, n)| SurfaceVertex {
-                        position: (*p).into(),
-                        normal: (*n).into(),
-                        patch_id: m.patch_id,
-                        color,
-                    }),
-            );
+            vertices.extend(surface_vertices(
+                &m.positions,
+                &m.normals,
+                m.patch_id,
+                packed_color(m.color),
+            ));
             indices.extend(m.triangles.iter().flatten().map(|i| base + i));
         }
         let borders = BorderGeometry::of(meshes.iter().copied());
-        let device = &self.gpu.device;
-        // Empty buffers are not allowed to be bound; keep at least one element.
-        let init = |label, bytes: &[u8], usage| {
-            let pad = [0u8; 80];
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: if bytes.is_empty() { &pad } else { bytes },
-                usage,
-            })
-        };
+        let init = |label, bytes: &[u8], usage| buffer_init(&self.gpu.device, label, bytes, usage);
         GpuMeshes {
             vertices: init(
                 "vertices",
@@ -497,17 +515,8 @@ impl Renderer {
             return s.clone();
         }
         cache.retain(|_, s| Arc::strong_count(&s.patch) > 1);
-        let vertices: Vec<SurfaceVertex> = patch
-            .positions
-            .iter()
-            .zip(&patch.normals)
-            .map(|(p, n)| SurfaceVertex {
-                position: (*p).into(),
-                normal: (*n).into(),
-                patch_id: m.patch_id,
-                color,
-            })
-            .collect();
+        let vertices: Vec<SurfaceVertex> =
+            surface_vertices(&patch.positions, &patch.normals, m.patch_id, color).collect();
         let indices: Vec<u32> = patch
             .hierarchy
             .triangles
@@ -515,18 +524,8 @@ impl Renderer {
             .flatten()
             .copied()
             .collect();
-        let device = &self.gpu.device;
-        let buffer = |label, contents: &[u8], usage| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: if contents.is_empty() {
-                    &[0; 16]
-                } else {
-                    contents
-                },
-                usage,
-            })
-        };
+        let buffer =
+            |label, bytes: &[u8], usage| buffer_init(&self.gpu.device, label, bytes, usage);
         let s = Arc::new(StaticPatch {
             vertices: buffer(
                 "patch vertices",
