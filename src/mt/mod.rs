@@ -35,7 +35,7 @@ pub const DEFAULT_ARC_SIZE: f64 = 5.0;
 /// A multiply-and-rotate hasher for the small integer keys of the arc-collapse maps (the
 /// default SipHash took a quarter of the reduction time); keys are not attacker-chosen.
 #[derive(Default)]
-struct IntHasher(u64);
+pub(crate) struct IntHasher(u64);
 
 impl Hasher for IntHasher {
     fn finish(&self) -> u64 {
@@ -54,7 +54,7 @@ impl Hasher for IntHasher {
     }
 }
 
-type IntMap<K, V> = HashMap<K, V, BuildHasherDefault<IntHasher>>;
+pub(crate) type IntMap<K, V> = HashMap<K, V, BuildHasherDefault<IntHasher>>;
 type IntSet<K> = HashSet<K, BuildHasherDefault<IntHasher>>;
 
 /// Remover of a triangle that is never removed.
@@ -74,6 +74,11 @@ pub struct MtHierarchy {
     pub node_error: Vec<f64>,
     /// Node whose collapse moved each vertex away, or [`NEVER`].
     pub vertex_removed_by: Vec<u32>,
+    /// Vertex each removed vertex was moved onto by its half-edge collapse (itself when never
+    /// removed). The cut after a prefix of [`MtHierarchy::order`] is the original mesh with
+    /// every removed vertex replaced by the end of its chain of targets, degenerate triangles
+    /// dropped — what multiresolution strips (`strips::mts`) substitute in their sequences.
+    pub vertex_target: Vec<u32>,
     /// Arcs: the triangles are sorted so that every arc's triangles are contiguous, arc `k`
     /// being `triangles[arc_start[k]..arc_start[k + 1]]`, created by `arc_nodes[k].0` and
     /// removed by `arc_nodes[k].1`. One static index range per arc.
@@ -289,6 +294,49 @@ impl MtHierarchy {
             }
         }
         achieved
+    }
+
+    /// The triangle ranges node `node` removes (`created == false`) or creates (`true`):
+    /// applying the node replaces the first by the second (an edge collapse, or several merged
+    /// by arc collapse); undoing it is the vertex split.
+    pub fn node_ranges(
+        &self,
+        node: u32,
+        created: bool,
+    ) -> impl Iterator<Item = std::ops::Range<usize>> + '_ {
+        let n = node as usize;
+        let (start, arcs) = if created {
+            (&self.out_start, &self.out_arcs)
+        } else {
+            (&self.in_start, &self.in_arcs)
+        };
+        let list: &[u32] = match (start.get(n), start.get(n + 1)) {
+            (Some(&a), Some(&b)) => &arcs[a as usize..b as usize],
+            _ => &[],
+        };
+        list.iter().map(|&a| {
+            self.arc_start[a as usize] as usize..self.arc_start[a as usize + 1] as usize
+        })
+    }
+
+    /// Where vertex `v` is after the first `applied` nodes of [`MtHierarchy::order`]: the end
+    /// of its chain of collapse targets through applied nodes.
+    pub fn vertex_at(&self, v: u32, applied: usize) -> u32 {
+        let mut v = v;
+        for _ in 0..self.vertex_target.len() {
+            match self.vertex_removed_by.get(v as usize) {
+                Some(&n) if n != NEVER && (self.rank[n as usize] as usize) < applied => {
+                    v = self.vertex_target[v as usize];
+                }
+                _ => break,
+            }
+        }
+        v
+    }
+
+    /// Position of `node` in [`MtHierarchy::order`].
+    pub fn rank_of(&self, node: u32) -> usize {
+        self.rank[node as usize] as usize
     }
 
     /// Whether vertex `v` is still a vertex of `cut` (not moved away by an applied node).
@@ -764,6 +812,7 @@ struct Builder {
     border: Vec<Option<Vec<u32>>>,
     stamp: Vec<u32>,
     vertex_removed_by: Vec<u32>,
+    vertex_target: Vec<u32>,
 }
 
 impl Builder {
@@ -819,6 +868,7 @@ impl Builder {
             border,
             stamp: vec![0; n],
             vertex_removed_by: vec![NEVER; n],
+            vertex_target: (0..n as u32).collect(),
         }
     }
 
@@ -947,6 +997,7 @@ impl Builder {
             removed_by: self.removed_by,
             node_error: self.node_error,
             vertex_removed_by: self.vertex_removed_by,
+            vertex_target: self.vertex_target,
             ..Default::default()
         };
         h.layout();
@@ -958,6 +1009,7 @@ impl Builder {
         let node = self.node_error.len() as u32;
         let removed: Vec<u32> = self.around[from as usize].clone();
         self.vertex_removed_by[from as usize] = node;
+        self.vertex_target[from as usize] = to;
         let mut region: Vec<u32> = Vec::new();
         let mut inherited = 0.0f64;
         for &t in &removed {

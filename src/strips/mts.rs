@@ -1,0 +1,1 @@
+//! Multiresolution triangle strips (to come).
