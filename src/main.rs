@@ -11,7 +11,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use patchwork::check::{CheckOptions, run_check};
 use patchwork::io::{self, png};
 use patchwork::model::Scene;
-use patchwork::render::{FatBorders, RenderOptions, Renderer, Shading};
+use patchwork::render::{FatBorders, Primitives, RenderOptions, Renderer, Shading};
 use patchwork::tessellate::{MeshStats, tessellate_scene};
 use patchwork::view::{self, View};
 
@@ -128,6 +128,10 @@ struct ViewArgs {
     /// With --implode: frames per implosion.
     #[arg(long, default_value_t = 60, requires = "implode")]
     implode_frames: usize,
+    /// Surface primitives: `list` (indexed triangles) or `strips` (triangle strips by
+    /// tunneling; static strips per arc for mesh patches).
+    #[arg(long, default_value = "list")]
+    primitives: Primitives,
 }
 
 #[derive(Args, Debug)]
@@ -162,6 +166,11 @@ struct BenchArgs {
     /// static per-patch buffers (for comparison).
     #[arg(long)]
     upload_cuts: bool,
+    /// Surface primitives: `list` (indexed triangles) or `strips` (triangle strips by
+    /// tunneling; static strips per arc for mesh patches).
+    #[arg(long, default_value = "list")]
+    primitives: Primitives,
+
     /// Per-frame CSV.
     #[arg(long, default_value = "flythrough.csv")]
     csv: PathBuf,
@@ -222,6 +231,10 @@ struct DrawArgs {
     /// Samples per pixel: 1 or 4.
     #[arg(long, default_value_t = 4, value_parser = parse_msaa)]
     msaa: u32,
+    /// Surface primitives: `list` (indexed triangles) or `strips` (triangle strips by
+    /// tunneling; static strips per arc for mesh patches).
+    #[arg(long, default_value = "list")]
+    primitives: Primitives,
 }
 
 impl DrawArgs {
@@ -281,6 +294,10 @@ struct CheckArgs {
     /// Write actual and crack-mask images of views with cracks or growth into this folder.
     #[arg(long)]
     save_failures: Option<PathBuf>,
+    /// Surface primitives: `list` (indexed triangles) or `strips` (triangle strips by
+    /// tunneling; static strips per arc for mesh patches).
+    #[arg(long, default_value = "list")]
+    primitives: Primitives,
 }
 
 fn parse_triple<T: std::str::FromStr>(s: &str, what: &str) -> Result<[T; 3], String> {
@@ -428,6 +445,7 @@ fn cmd_render(args: &RenderArgs) -> Result<(), CliError> {
     let t_tess = t0.elapsed();
     report_failures(&meshes);
     let mut renderer = Renderer::new()?;
+    renderer.primitives = args.draw.primitives;
     eprintln!("adapter: {}", renderer.gpu().describe());
     let gpu = renderer.upload(&meshes);
     let opts = args.draw.options();
@@ -506,6 +524,7 @@ fn cmd_implode(args: &ImplodeArgs) -> Result<bool, CliError> {
     std::fs::create_dir_all(&args.output)
         .map_err(|e| format!("{}: cannot create the folder: {e}", args.output.display()))?;
     let mut renderer = Renderer::new()?;
+    renderer.primitives = args.draw.primitives;
     eprintln!("adapter: {}", renderer.gpu().describe());
     let opts = AnimOptions {
         frames: args.frames,
@@ -850,6 +869,7 @@ fn cmd_check(args: &CheckArgs) -> Result<bool, CliError> {
     }
     let scene = load(&args.file)?;
     let mut renderer = Renderer::new()?;
+    renderer.primitives = args.primitives;
     eprintln!("adapter: {}", renderer.gpu().describe());
     if let Some(dir) = &args.save_failures {
         std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
@@ -962,6 +982,7 @@ fn cmd_bench(args: &BenchArgs) -> Result<bool, CliError> {
     let scene = load(&args.file)?;
     let mut renderer = Renderer::new()?;
     renderer.static_arcs = !args.upload_cuts;
+    renderer.primitives = args.primitives;
     eprintln!("adapter: {}", renderer.gpu().describe());
     let opts = FlythroughOptions {
         frames: args.frames,
@@ -1096,6 +1117,7 @@ fn cmd_view(args: &ViewArgs) -> Result<(), CliError> {
                 distance: args.distance,
                 frames: args.implode_frames.max(2),
             }),
+            primitives: args.primitives,
         },
     )?;
     eprintln!(

@@ -67,6 +67,8 @@ pub struct ViewerOptions {
     pub keys: Vec<String>,
     /// Play an implosion/explosion loop (space pauses and resumes).
     pub implode: Option<ViewerAnimation>,
+    /// Triangle lists or strips.
+    pub primitives: crate::render::Primitives,
 }
 
 /// The viewer's animation: the parts (or patches) fly together over `frames` frames, stay
@@ -533,7 +535,8 @@ impl App {
         config.view_formats.clear();
         surface.configure(&gpu.device, &config);
         let present = Present::new(&gpu.device, format);
-        let renderer = Renderer::with_gpu(gpu)?;
+        let mut renderer = Renderer::with_gpu(gpu)?;
+        renderer.primitives = self.options.primitives;
         eprintln!("adapter: {}", renderer.gpu().describe());
         let view = self.view(config.width, config.height);
         let lod = FrameLoop::new(&self.scene, &view, self.options.lod);

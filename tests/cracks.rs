@@ -6,18 +6,25 @@ mod common;
 
 use patchwork::check::crack::contour_margin;
 use patchwork::check::{CheckOptions, CheckReport, run_check};
-use patchwork::render::FatBorders;
+use patchwork::render::{FatBorders, Primitives};
 
 const VIEWS: usize = 20;
 
 fn check(pixel_error: f64, seed: u64) -> CheckReport {
+    check_with(pixel_error, seed, Primitives::List, VIEWS)
+}
+
+fn check_with(pixel_error: f64, seed: u64, primitives: Primitives, views: usize) -> CheckReport {
     let scene = common::teapot();
     let mut renderer = common::renderer();
+    renderer.primitives = primitives;
     let opts = CheckOptions {
-        views: VIEWS,
+        views,
         seed,
         pixel_error,
-        save_failures: Some(common::scratch(&format!("cracks-{pixel_error}px"))),
+        save_failures: Some(common::scratch(&format!(
+            "cracks-{pixel_error}px-{primitives:?}"
+        ))),
         ..CheckOptions::default()
     };
     run_check(&mut renderer, &scene, &opts, |_| {}).expect("rendering works")
@@ -77,4 +84,12 @@ fn no_cracks_with_fat_borders_at_half_a_pixel() {
 fn no_cracks_with_fat_borders_at_four_pixels() {
     let r = check(4.0, 2);
     assert_crack_free(&r, 4.0);
+}
+
+/// Triangle strips (tunneling per patch) draw the same triangles: still crack-free.
+#[test]
+fn no_cracks_with_strips_at_half_a_pixel() {
+    let r = check_with(0.5, 3, Primitives::Strips, 8);
+    assert_eq!(r.views.len(), 8);
+    assert_crack_free(&r, 0.5);
 }

@@ -5,7 +5,7 @@ mod common;
 
 use glam::DVec3;
 use patchwork::check::golden::{GoldenOutcome, Thresholds, compare_with_golden};
-use patchwork::render::{RenderOptions, Shading};
+use patchwork::render::{Primitives, RenderOptions, Shading};
 use patchwork::tessellate::tessellate_scene;
 use patchwork::view::{self, View};
 
@@ -14,6 +14,29 @@ fn golden(name: &str, dir: Option<DVec3>) {
 }
 
 fn golden_of(scene: patchwork::model::Scene, name: &str, dir: Option<DVec3>) {
+    golden_with(scene, name, dir, Primitives::List)
+}
+
+/// Triangle strips draw the same triangles: the same goldens hold.
+#[test]
+fn strips_match_the_list_goldens() {
+    golden_with(common::teapot(), "teapot-default", None, Primitives::Strips);
+    golden_with(
+        common::teapot(),
+        "teapot-side",
+        Some(DVec3::new(0.0, -1.0, 0.15)),
+        Primitives::Strips,
+    );
+    // Trimmed NURBS faces of a STEP assembly.
+    golden_with(common::load("as1-oc-214.stp"), "step-as1", None, Primitives::Strips);
+}
+
+fn golden_with(
+    scene: patchwork::model::Scene,
+    name: &str,
+    dir: Option<DVec3>,
+    primitives: Primitives,
+) {
     let up = scene.up.vector();
     let fov = view::DEFAULT_FOV_Y_DEG.to_radians();
     let size = (400, 300);
@@ -23,6 +46,7 @@ fn golden_of(scene: patchwork::model::Scene, name: &str, dir: Option<DVec3>) {
     };
     let meshes = tessellate_scene(&scene, &v, view::DEFAULT_PIXEL_ERROR);
     let mut renderer = common::renderer();
+    renderer.primitives = primitives;
     let gpu = renderer.upload(&meshes);
     let opts = RenderOptions {
         shading: Shading::Lit,

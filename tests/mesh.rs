@@ -256,15 +256,26 @@ fn every_cut_of_the_bunny_patches_is_a_triangulation_within_its_error() {
 
 #[test]
 fn independently_simplified_patches_are_crack_free_with_fat_borders() {
+    bunny_crack_free(patchwork::render::Primitives::List, 20);
+}
+
+/// The same check drawing static strips per arc.
+#[test]
+fn bunny_drawn_with_strips_is_crack_free_with_fat_borders() {
+    bunny_crack_free(patchwork::render::Primitives::Strips, 8);
+}
+
+fn bunny_crack_free(primitives: patchwork::render::Primitives, views: usize) {
     let scene = bunny();
     let mut renderer = common::renderer();
+    renderer.primitives = primitives;
     let opts = patchwork::check::CheckOptions {
-        views: 20,
+        views,
         variants: vec![
             patchwork::render::FatBorders::Off,
             patchwork::render::FatBorders::Six,
         ],
-        save_failures: Some(common::scratch("cracks-bunny")),
+        save_failures: Some(common::scratch(&format!("cracks-bunny-{primitives:?}"))),
         ..patchwork::check::CheckOptions::default()
     };
     let r = patchwork::check::run_check(&mut renderer, scene, &opts, |_| {}).expect("renders");
@@ -325,10 +336,36 @@ fn bunny_golden_and_static_arcs_draw_what_uploaded_triangles_draw() {
         differ * 1000 <= (size.0 * size.1) as usize,
         "{differ} pixels differ between static arcs and uploaded triangles"
     );
+    // Static strips per arc: the same triangles, so the same image and the same golden.
+    renderer.static_arcs = true;
+    renderer.primitives = patchwork::render::Primitives::Strips;
+    let gpu = renderer.upload(&meshes);
+    assert_eq!(gpu.triangle_count() as usize, drawn);
+    // Arcs of ~5 triangles: a strip per arc costs its 2 extra vertices and a restart.
+    assert!(
+        gpu.index_count() * 4 < 3 * 3 * drawn as u64,
+        "strips send {} indices for {drawn} triangles",
+        gpu.index_count()
+    );
+    let stripped = renderer.render(&gpu, &v, &opts).expect("render");
+    let differ = fixed
+        .color
+        .chunks_exact(4)
+        .zip(stripped.color.chunks_exact(4))
+        .filter(|(a, b)| a.iter().zip(b.iter()).any(|(x, y)| x.abs_diff(*y) > 2))
+        .count();
+    assert!(
+        differ * 1000 <= (size.0 * size.1) as usize,
+        "{differ} pixels differ between static arc strips and lists"
+    );
     let path = common::root().join("golden/mesh-bunny.png");
-    match compare_with_golden(&path, &fixed.to_rgba_image(), Thresholds::default()) {
-        Ok(GoldenOutcome::Matched(score)) => eprintln!("mesh-bunny: {score:?}"),
-        Ok(GoldenOutcome::Updated) => eprintln!("mesh-bunny: golden rewritten (GOLDEN_UPDATE=1)"),
-        Err(e) => panic!("{e}"),
+    for (what, frame) in [("lists", &fixed), ("strips", &stripped)] {
+        match compare_with_golden(&path, &frame.to_rgba_image(), Thresholds::default()) {
+            Ok(GoldenOutcome::Matched(score)) => eprintln!("mesh-bunny ({what}): {score:?}"),
+            Ok(GoldenOutcome::Updated) => {
+                eprintln!("mesh-bunny: golden rewritten (GOLDEN_UPDATE=1)")
+            }
+            Err(e) => panic!("{what}: {e}"),
+        }
     }
 }

@@ -49,6 +49,28 @@ impl std::str::FromStr for Shading {
     }
 }
 
+/// How surfaces are sent to the GPU.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Primitives {
+    /// Indexed triangle lists.
+    #[default]
+    List,
+    /// Triangle strips joined by primitive restart (`strips`): tunneling strips per
+    /// tessellated patch, static strips per arc of a mesh patch's hierarchy.
+    Strips,
+}
+
+impl std::str::FromStr for Primitives {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "list" => Ok(Primitives::List),
+            "strips" => Ok(Primitives::Strips),
+            _ => Err(format!("primitives must be list or strips, not {s:?}")),
+        }
+    }
+}
+
 /// Default background (RGB, 0–255).
 pub const DEFAULT_BACKGROUND: [u8; 3] = [255, 255, 255];
 /// Default surface colour for `lit` shading (RGB, 0–1).
@@ -186,6 +208,10 @@ pub struct GpuMeshes {
     vertices: wgpu::Buffer,
     indices: wgpu::Buffer,
     index_count: u32,
+    /// Whether `indices` and the static ranges are strips (else lists).
+    strips: bool,
+    /// Surface triangles uploaded in `indices`.
+    triangles: u32,
     border_vertices: wgpu::Buffer,
     /// Index buffers for the 6-, 4- and 2-vertex variants, with their index counts.
     border_indices: [(wgpu::Buffer, u32); 3],
@@ -200,12 +226,22 @@ pub struct GpuMeshes {
     static_triangles: u32,
 }
 
+/// Per-arc strips of a mesh patch's hierarchy: the index buffer and, per arc boundary, the
+/// first index of the arc.
+#[derive(Debug)]
+struct StaticStrips {
+    indices: wgpu::Buffer,
+    starts: Vec<u32>,
+}
+
 /// Every vertex and every triangle of one mesh patch's hierarchy, uploaded once; cuts are
 /// drawn as index ranges of it.
 #[derive(Debug)]
 struct StaticPatch {
     vertices: wgpu::Buffer,
     indices: wgpu::Buffer,
+    /// Static strips per arc (built when the patch is first drawn with strips).
+    strips: Option<StaticStrips>,
     /// Keeps the patch alive, so its address (the cache key) is not reused.
     patch: Arc<crate::model::mesh::MeshPatch>,
 }
@@ -213,12 +249,18 @@ struct StaticPatch {
 /// Size of one `DrawIndexedIndirectArgs`.
 const DRAW_ARGS_BYTES: u64 = 20;
 
-/// Cache key of a static patch: the patch's address, its id and its colour.
-type StaticKey = (usize, u32, [u8; 4]);
+/// Cache key of a static patch: the patch's address, its id, its colour and whether it
+/// holds strips.
+type StaticKey = (usize, u32, [u8; 4], bool);
 
 impl GpuMeshes {
     pub fn triangle_count(&self) -> u32 {
-        self.index_count / 3 + self.static_triangles
+        self.triangles + self.static_triangles
+    }
+
+    /// Surface indices a draw sends (uploaded and static ranges; restarts and swaps included).
+    pub fn index_count(&self) -> u64 {
+        self.index_count as u64 + self.ranges.iter().map(|r| r[1] as u64).sum::<u64>()
     }
 
     /// Index ranges drawn from static per-patch buffers (after merging adjacent arcs).
@@ -254,6 +296,7 @@ struct Globals {
 #[derive(Debug)]
 struct Pipelines {
     surface: wgpu::RenderPipeline,
+    surface_strip: wgpu::RenderPipeline,
     border: wgpu::RenderPipeline,
 }
 
@@ -286,6 +329,8 @@ pub struct Renderer {
     /// Draw mesh-patch cuts from static per-patch buffers (default) instead of uploading
     /// their triangles with every new tessellation.
     pub static_arcs: bool,
+    /// Triangle lists or strips for surfaces.
+    pub primitives: Primitives,
 }
 
 /// The textures, uniform and readback buffer one pass renders with; reused while the image
@@ -414,6 +459,7 @@ impl Renderer {
             targets: HashMap::new(),
             statics: Mutex::new(HashMap::new()),
             static_arcs: true,
+            primitives: Primitives::List,
         })
     }
 
@@ -427,18 +473,26 @@ impl Renderer {
         let mut vertices = Vec::new();
         let mut indices: Vec<u32> = Vec::new();
         let (mut statics, mut ranges, mut static_triangles) = (Vec::new(), Vec::new(), 0u32);
+        let strips = self.primitives == Primitives::Strips;
+        let mut triangles = 0u32;
         for m in meshes.iter().copied() {
             if let Some(cut) = m.arcs.as_ref().filter(|_| self.static_arcs) {
                 let first = ranges.len() as u32;
+                let sp = self.static_patch(m, &cut.patch, strips);
+                let arc_start = &cut.patch.hierarchy.arc_start;
                 for &[start, count] in &cut.ranges {
-                    ranges.push([start * 3, count * 3]);
                     static_triangles += count;
+                    match &sp.strips {
+                        Some(st) => {
+                            // Ranges cover whole arcs: map arc boundaries to strip indices.
+                            let a = arc_start.partition_point(|&x| x < start);
+                            let b = arc_start.partition_point(|&x| x < start + count);
+                            ranges.push([st.starts[a], st.starts[b] - st.starts[a]]);
+                        }
+                        None => ranges.push([start * 3, count * 3]),
+                    }
                 }
-                statics.push((
-                    self.static_patch(m, &cut.patch),
-                    first,
-                    ranges.len() as u32 - first,
-                ));
+                statics.push((sp, first, ranges.len() as u32 - first));
                 continue;
             }
             let base = vertices.len() as u32;
@@ -448,7 +502,22 @@ impl Renderer {
                 m.patch_id,
                 packed_color(m.color),
             ));
-            indices.extend(m.triangles.iter().flatten().map(|i| base + i));
+            triangles += m.triangles.len() as u32;
+            if strips {
+                let s = m.strips.get(&m.triangles);
+                if !s.is_empty() && !indices.is_empty() {
+                    indices.push(crate::strips::RESTART);
+                }
+                indices.extend(s.iter().map(|&i| {
+                    if i == crate::strips::RESTART {
+                        i
+                    } else {
+                        base + i
+                    }
+                }));
+            } else {
+                indices.extend(m.triangles.iter().flatten().map(|i| base + i));
+            }
         }
         let borders = BorderGeometry::of(meshes.iter().copied());
         let init = |label, bytes: &[u8], usage| buffer_init(&self.gpu.device, label, bytes, usage);
@@ -464,6 +533,8 @@ impl Renderer {
                 wgpu::BufferUsages::INDEX,
             ),
             index_count: indices.len() as u32,
+            strips,
+            triangles,
             border_vertices: init(
                 "fat border vertices",
                 bytemuck::cast_slice(&borders.vertices),
@@ -507,9 +578,10 @@ impl Renderer {
         &self,
         m: &PatchMesh,
         patch: &Arc<crate::model::mesh::MeshPatch>,
+        strips: bool,
     ) -> Arc<StaticPatch> {
         let color = packed_color(m.color);
-        let key = (Arc::as_ptr(patch) as usize, m.patch_id, color);
+        let key = (Arc::as_ptr(patch) as usize, m.patch_id, color, strips);
         let mut cache = self.statics.lock().unwrap_or_else(|e| e.into_inner());
         if let Some(s) = cache.get(&key) {
             return s.clone();
@@ -537,6 +609,20 @@ impl Renderer {
                 bytemuck::cast_slice(&indices),
                 wgpu::BufferUsages::INDEX,
             ),
+            strips: strips.then(|| {
+                let (st, starts) = crate::strips::arc_strips(
+                    &patch.hierarchy,
+                    &crate::strips::tunnel::TunnelOptions::default(),
+                );
+                StaticStrips {
+                    indices: buffer(
+                        "patch arc strips",
+                        bytemuck::cast_slice(&st.indices),
+                        wgpu::BufferUsages::INDEX,
+                    ),
+                    starts,
+                }
+            }),
             patch: patch.clone(),
         });
         cache.insert(key, s.clone());
@@ -574,7 +660,10 @@ impl Renderer {
             step_mode: wgpu::VertexStepMode::Vertex,
             attributes: &border_attrs,
         })];
-        let make = |label: &str, vs: &str, buffers: &[Option<wgpu::VertexBufferLayout<'_>>]| {
+        let make = |label: &str,
+                    vs: &str,
+                    buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
+                    strip: bool| {
             self.gpu
                 .device
                 .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
@@ -587,7 +676,12 @@ impl Renderer {
                         buffers,
                     },
                     primitive: wgpu::PrimitiveState {
-                        topology: wgpu::PrimitiveTopology::TriangleList,
+                        topology: if strip {
+                            wgpu::PrimitiveTopology::TriangleStrip
+                        } else {
+                            wgpu::PrimitiveTopology::TriangleList
+                        },
+                        strip_index_format: strip.then_some(wgpu::IndexFormat::Uint32),
                         cull_mode: None,
                         ..Default::default()
                     },
@@ -617,8 +711,9 @@ impl Renderer {
                 })
         };
         Pipelines {
-            surface: make("surface", "vs_surface", &surface_buffers),
-            border: make("fat border", "vs_border", &border_buffers),
+            surface: make("surface", "vs_surface", &surface_buffers, false),
+            surface_strip: make("surface strips", "vs_surface", &surface_buffers, true),
+            border: make("fat border", "vs_border", &border_buffers, false),
         }
     }
 
@@ -811,17 +906,23 @@ impl Renderer {
                 multiview_mask: None,
             });
             pass.set_bind_group(0, bind, &[]);
+            let surface = if meshes.strips {
+                &pipes.surface_strip
+            } else {
+                &pipes.surface
+            };
             if meshes.index_count > 0 {
-                pass.set_pipeline(&pipes.surface);
+                pass.set_pipeline(surface);
                 pass.set_vertex_buffer(0, meshes.vertices.slice(..));
                 pass.set_index_buffer(meshes.indices.slice(..), wgpu::IndexFormat::Uint32);
                 pass.draw_indexed(0..meshes.index_count, 0, 0..1);
             }
             if !meshes.statics.is_empty() {
-                pass.set_pipeline(&pipes.surface);
+                pass.set_pipeline(surface);
                 for (patch, first, count) in &meshes.statics {
                     pass.set_vertex_buffer(0, patch.vertices.slice(..));
-                    pass.set_index_buffer(patch.indices.slice(..), wgpu::IndexFormat::Uint32);
+                    let indices = patch.strips.as_ref().map_or(&patch.indices, |s| &s.indices);
+                    pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
                     match &meshes.indirect {
                         Some(args) => pass.multi_draw_indexed_indirect(
                             args,

@@ -44,6 +44,8 @@ pub struct PatchMesh {
     /// hierarchy's triangles, which the renderer draws from index buffers built once per
     /// patch (`triangles` holds the same triangles for CPU work).
     pub arcs: Option<CutRanges>,
+    /// Its triangle strips, built when first drawn with `Primitives::Strips`.
+    pub strips: crate::strips::StripCache,
 }
 
 /// A cut as ranges `[first, count]` of its patch's [`crate::mt::MtHierarchy::triangles`].
