@@ -28,7 +28,12 @@ fn strips_match_the_list_goldens() {
         Primitives::Strips,
     );
     // Trimmed NURBS faces of a STEP assembly.
-    golden_with(common::load("as1-oc-214.stp"), "step-as1", None, Primitives::Strips);
+    golden_with(
+        common::load("as1-oc-214.stp"),
+        "step-as1",
+        None,
+        Primitives::Strips,
+    );
 }
 
 fn golden_with(

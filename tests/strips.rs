@@ -46,7 +46,11 @@ fn grid_positions(w: u32, h: u32, seed: u32) -> Vec<Vec3> {
             s ^= s >> 17;
             s ^= s << 5;
             let z = (s % 1000) as f32 / 1000.0 * 0.3;
-            out.push(Vec3::new(x as f32, y as f32, z + 0.2 * (x as f32 * 0.7).sin()));
+            out.push(Vec3::new(
+                x as f32,
+                y as f32,
+                z + 0.2 * (x as f32 * 0.7).sin(),
+            ));
         }
     }
     out
@@ -151,8 +155,8 @@ fn cut_at(hier: &MtHierarchy, level: usize) -> Vec<[u32; 3]> {
     let mut cut = Vec::new();
     for (t, tri) in hier.triangles.iter().enumerate() {
         let made = hier.rank_of(hier.created_by[t]) < level;
-        let gone = hier.removed_by[t] != patchwork::mt::NEVER
-            && hier.rank_of(hier.removed_by[t]) < level;
+        let gone =
+            hier.removed_by[t] != patchwork::mt::NEVER && hier.rank_of(hier.removed_by[t]) < level;
         if made && !gone {
             cut.push(*tri);
         }

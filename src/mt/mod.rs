@@ -314,9 +314,8 @@ impl MtHierarchy {
             (Some(&a), Some(&b)) => &arcs[a as usize..b as usize],
             _ => &[],
         };
-        list.iter().map(|&a| {
-            self.arc_start[a as usize] as usize..self.arc_start[a as usize + 1] as usize
-        })
+        list.iter()
+            .map(|&a| self.arc_start[a as usize] as usize..self.arc_start[a as usize + 1] as usize)
     }
 
     /// Where vertex `v` is after the first `applied` nodes of [`MtHierarchy::order`]: the end

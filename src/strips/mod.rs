@@ -74,7 +74,11 @@ fn rotate_to_exit(t: [u32; 3], next: [u32; 3]) -> Option<[u32; 3]> {
 
 /// The triangle window `j` of a strip draws (with its orientation).
 fn window(j: usize, a: u32, b: u32, c: u32) -> [u32; 3] {
-    if j % 2 == 0 { [a, b, c] } else { [b, a, c] }
+    if j.is_multiple_of(2) {
+        [a, b, c]
+    } else {
+        [b, a, c]
+    }
 }
 
 /// Appends the strips of a path of triangles to `out` (a [`RESTART`] before each strip but
@@ -207,7 +211,8 @@ impl StripCache {
         {
             return s.clone();
         }
-        let s = std::sync::Arc::new(tunnel::stripify(tris, &tunnel::TunnelOptions::default()).indices);
+        let s =
+            std::sync::Arc::new(tunnel::stripify(tris, &tunnel::TunnelOptions::default()).indices);
         *slot = Some((key, s.clone()));
         s
     }

@@ -90,7 +90,10 @@ impl MultiresStrips {
                 }
             }
             strips.push(MStrip {
-                occ: seq.iter().map(|&v| Occurrence { v, lo: 1, hi: open }).collect(),
+                occ: seq
+                    .iter()
+                    .map(|&v| Occurrence { v, lo: 1, hi: open })
+                    .collect(),
                 ..Default::default()
             });
             at.push((0..seq.len()).collect());
@@ -157,12 +160,20 @@ impl MultiresStrips {
                 let new_mid = &fresh[p..fresh.len() - s];
                 strip.occ.splice(
                     insert_at..insert_at,
-                    new_mid.iter().map(|&v| Occurrence { v, lo: level, hi: open }),
+                    new_mid.iter().map(|&v| Occurrence {
+                        v,
+                        lo: level,
+                        hi: open,
+                    }),
                 );
                 // Re-index positions (occurrence indices after the insertion point shift).
                 let shift = new_mid.len();
                 let mut idx: Vec<usize> = Vec::with_capacity(fresh.len());
-                idx.extend(at[k][..p].iter().map(|&o| if o >= insert_at { o + shift } else { o }));
+                idx.extend(
+                    at[k][..p]
+                        .iter()
+                        .map(|&o| if o >= insert_at { o + shift } else { o }),
+                );
                 idx.extend(insert_at..insert_at + shift);
                 idx.extend(
                     at[k][old.len() - s..]

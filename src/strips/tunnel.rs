@@ -727,7 +727,11 @@ impl TunnelStrips {
             }
         }
         if edges / 2 != self.strip_edges {
-            return Err(format!("{} strip edges counted as {}", edges / 2, self.strip_edges));
+            return Err(format!(
+                "{} strip edges counted as {}",
+                edges / 2,
+                self.strip_edges
+            ));
         }
         self.seen_epoch = self.seen_epoch.wrapping_add(1);
         for x in 0..self.tri.len() as u32 {
