@@ -197,6 +197,7 @@ fn zero_image_size_and_bad_flags_are_rejected() {
         &["--msaa", "3"],
         &["--fat-borders", "5"],
         &["--shading", "toon"],
+        &["--primitives", "fans"],
         &["--pixel-error", "0"],
         &["--pixel-error", "nan"],
         &["--fov", "0"],

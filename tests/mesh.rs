@@ -326,12 +326,7 @@ fn bunny_golden_and_static_arcs_draw_what_uploaded_triangles_draw() {
     assert_eq!(gpu.static_range_count(), 0);
     assert_eq!(gpu.triangle_count() as usize, drawn);
     let uploaded = renderer.render(&gpu, &v, &opts).expect("render");
-    let differ = fixed
-        .color
-        .chunks_exact(4)
-        .zip(uploaded.color.chunks_exact(4))
-        .filter(|(a, b)| a.iter().zip(b.iter()).any(|(x, y)| x.abs_diff(*y) > 2))
-        .count();
+    let differ = differing_pixels(&fixed, &uploaded);
     assert!(
         differ * 1000 <= (size.0 * size.1) as usize,
         "{differ} pixels differ between static arcs and uploaded triangles"
@@ -348,12 +343,7 @@ fn bunny_golden_and_static_arcs_draw_what_uploaded_triangles_draw() {
         gpu.index_count()
     );
     let stripped = renderer.render(&gpu, &v, &opts).expect("render");
-    let differ = fixed
-        .color
-        .chunks_exact(4)
-        .zip(stripped.color.chunks_exact(4))
-        .filter(|(a, b)| a.iter().zip(b.iter()).any(|(x, y)| x.abs_diff(*y) > 2))
-        .count();
+    let differ = differing_pixels(&fixed, &stripped);
     assert!(
         differ * 1000 <= (size.0 * size.1) as usize,
         "{differ} pixels differ between static arc strips and lists"
@@ -368,4 +358,13 @@ fn bunny_golden_and_static_arcs_draw_what_uploaded_triangles_draw() {
             Err(e) => panic!("{what}: {e}"),
         }
     }
+}
+
+/// Pixels whose colour differs by more than 2 in some channel.
+fn differing_pixels(a: &patchwork::render::Frame, b: &patchwork::render::Frame) -> usize {
+    a.color
+        .chunks_exact(4)
+        .zip(b.color.chunks_exact(4))
+        .filter(|(a, b)| a.iter().zip(b.iter()).any(|(x, y)| x.abs_diff(*y) > 2))
+        .count()
 }
