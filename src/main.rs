@@ -437,6 +437,13 @@ fn report_failures(meshes: &[patchwork::tessellate::PatchMesh]) {
     }
 }
 
+/// Says when `--primitives strips` falls back to lists (GL backend).
+fn warn_strips(renderer: &Renderer) {
+    if renderer.primitives == Primitives::Strips && !renderer.strips_drawn() {
+        eprintln!("warning: primitive restart is broken on this backend: drawing lists");
+    }
+}
+
 fn cmd_render(args: &RenderArgs) -> Result<(), CliError> {
     let scene = load(&args.file)?;
     let view = make_view(&scene, &args.camera)?;
@@ -446,6 +453,7 @@ fn cmd_render(args: &RenderArgs) -> Result<(), CliError> {
     report_failures(&meshes);
     let mut renderer = Renderer::new()?;
     renderer.primitives = args.draw.primitives;
+    warn_strips(&renderer);
     eprintln!("adapter: {}", renderer.gpu().describe());
     let gpu = renderer.upload(&meshes);
     let opts = args.draw.options();
@@ -525,6 +533,7 @@ fn cmd_implode(args: &ImplodeArgs) -> Result<bool, CliError> {
         .map_err(|e| format!("{}: cannot create the folder: {e}", args.output.display()))?;
     let mut renderer = Renderer::new()?;
     renderer.primitives = args.draw.primitives;
+    warn_strips(&renderer);
     eprintln!("adapter: {}", renderer.gpu().describe());
     let opts = AnimOptions {
         frames: args.frames,
