@@ -4,7 +4,9 @@
 use glam::Vec3;
 use patchwork::mt::MtHierarchy;
 use patchwork::strips::tunnel::{CutStrips, TunnelOptions, TunnelStrips, stripify};
-use patchwork::strips::{RESTART, arc_strips, decode, encode_path, same_triangles};
+use patchwork::strips::{
+    RESTART, arc_strips, decode, encode_path, join_degenerate, same_triangles,
+};
 use proptest::prelude::*;
 
 /// A w×h grid of quads split along random diagonals, some cells dropped, some triangles
@@ -102,6 +104,12 @@ proptest! {
         prop_assert_eq!(idx.indices.iter().filter(|&&i| i == RESTART).count() + 1, idx.strips.max(1));
         prop_assert!(same_triangles(&decode(&idx.indices), &tris));
         prop_assert_eq!(stripify(&tris, &opts).triangles, tris.len());
+        // Joined by zero-area windows instead: one strip, the same oriented triangles, at most
+        // three indices per join.
+        let joined = join_degenerate(&idx.indices, &mut []);
+        prop_assert!(!joined.contains(&RESTART));
+        prop_assert!(same_triangles(&decode(&joined), &tris));
+        prop_assert!(joined.len() <= idx.indices.len() + 2 * idx.strips.saturating_sub(1));
     }
 
     #[test]
@@ -149,6 +157,38 @@ fn per_arc_strips_draw_every_arc_exactly() {
         assert!(same_triangles(&decode(range), arc), "arc {k}");
     }
     assert!(strips.indices_per_triangle() < 3.0);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(32))]
+
+    /// Per-arc strips joined by zero-area windows: every run of adjacent arcs (what a cut
+    /// draws as one range) draws exactly its arcs' triangles, with their orientation.
+    #[test]
+    fn degenerate_joins_keep_every_arc_range(
+        w in 2u32..12, h in 2u32..12, seed in 1u32..1000,
+        bits in prop::collection::vec(any::<bool>(), 1..32),
+        arc_size in 1.0f64..12.0,
+    ) {
+        let tris = grid_mesh(w, h, &bits, &[false], &[false]);
+        let mut hier = MtHierarchy::build(&grid_positions(w, h, seed), &tris);
+        hier.reduce(arc_size);
+        let (strips, starts) = arc_strips(&hier, &TunnelOptions::default());
+        let mut mapped = starts.clone();
+        let joined = join_degenerate(&strips.indices, &mut mapped);
+        prop_assert!(!joined.contains(&RESTART));
+        prop_assert_eq!(*mapped.last().unwrap() as usize, joined.len());
+        // Every range that draws something starts at an even index (parity kept).
+        prop_assert!(mapped.iter().all(|&s| s % 2 == 0 || s as usize == joined.len()), "odd start in {:?}", mapped);
+        let n = hier.arc_nodes.len();
+        for a in 0..n {
+            for b in a + 1..=n {
+                let arcs = &hier.triangles[hier.arc_start[a] as usize..hier.arc_start[b] as usize];
+                let range = &joined[mapped[a] as usize..mapped[b] as usize];
+                prop_assert!(same_triangles(&decode(range), arcs), "arcs {}..{}", a, b);
+            }
+        }
+    }
 }
 
 fn cut_at(hier: &MtHierarchy, level: usize) -> Vec<[u32; 3]> {

@@ -10,7 +10,8 @@
 //! triangle `(s_j, s_j+1, s_j+2)` when `j` is even and `(s_j+1, s_j, s_j+2)` when odd, so every
 //! triangle keeps its orientation. A *swap* (a strip turning the same way twice) costs one
 //! repeated vertex, which makes one zero-area window; strips are joined by the primitive
-//! restart index [`RESTART`] (`strip_index_format: Uint32`).
+//! restart index [`RESTART`] (`strip_index_format: Uint32`), or — where primitive restart
+//! is unreliable — by zero-area windows ([`join_degenerate`], [`Join`]).
 
 pub mod mts;
 pub mod tunnel;
@@ -39,6 +40,63 @@ impl StripIndices {
             self.indices.len() as f64 / self.triangles as f64
         }
     }
+}
+
+/// How the strips of one index buffer are joined.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Join {
+    /// The primitive restart index [`RESTART`]: one index per join.
+    #[default]
+    Restart,
+    /// Zero-area windows ([`join_degenerate`]): two or three indices per join, for backends
+    /// whose primitive restart draws wrong triangles (wgpu's GL backend on llvmpipe).
+    Degenerate,
+}
+
+impl std::str::FromStr for Join {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "restart" => Ok(Join::Restart),
+            "degenerate" => Ok(Join::Degenerate),
+            _ => Err(format!("strip joins must be restart or degenerate, not {s:?}")),
+        }
+    }
+}
+
+/// Rewrites strips joined by [`RESTART`] as one strip joined by zero-area windows: between a
+/// strip ending in `a` and the next one starting with `b`, the indices `a, b` — and `b` once
+/// more when the next strip would start at an odd index — so every strip starts at an even
+/// index and keeps its orientation. `starts` (ascending positions in `indices`, e.g. the
+/// per-arc block boundaries of [`arc_strips`]) are mapped to the rewritten buffer: each is
+/// even (but the end) and the join before it belongs to the range in front, so a draw of any
+/// `starts[i]..starts[j]` draws exactly the triangles the same range of `indices` draws.
+pub fn join_degenerate(indices: &[u32], starts: &mut [u32]) -> Vec<u32> {
+    let mut out = Vec::with_capacity(indices.len() + indices.len() / 8);
+    let mut next = 0; // first entry of `starts` not mapped yet
+    let mut pos = 0usize;
+    for strip in indices.split(|&i| i == RESTART) {
+        let begin = pos;
+        pos += strip.len() + 1;
+        let Some((&first, _)) = strip.split_first() else {
+            continue;
+        };
+        if let Some(&last) = out.last() {
+            out.extend([last, first]);
+            if out.len() % 2 == 1 {
+                out.push(first);
+            }
+        }
+        while next < starts.len() && starts[next] as usize <= begin {
+            starts[next] = out.len() as u32;
+            next += 1;
+        }
+        out.extend_from_slice(strip);
+    }
+    for s in &mut starts[next..] {
+        *s = out.len() as u32;
+    }
+    out
 }
 
 /// Whether `a` and `b` are the same triangle with the same orientation.
