@@ -128,8 +128,9 @@ struct ViewArgs {
     /// With --implode: frames per implosion.
     #[arg(long, default_value_t = 60, requires = "implode")]
     implode_frames: usize,
-    /// Surface primitives: `list` (indexed triangles) or `strips` (triangle strips by
-    /// tunneling; static strips per arc for mesh patches).
+    /// Surface primitives: `list` (indexed triangles), `strips` (static triangle strips by
+    /// tunneling; per arc for mesh patches), `mts` (mesh patches: multiresolution strips at
+    /// each cut) or `repair` (mesh patches: strips repaired by tunneling as the cut moves).
     #[arg(long, default_value = "list")]
     primitives: Primitives,
 }
@@ -166,10 +167,15 @@ struct BenchArgs {
     /// static per-patch buffers (for comparison).
     #[arg(long)]
     upload_cuts: bool,
-    /// Surface primitives: `list` (indexed triangles) or `strips` (triangle strips by
-    /// tunneling; static strips per arc for mesh patches).
+    /// Surface primitives: `list` (indexed triangles), `strips` (static triangle strips by
+    /// tunneling; per arc for mesh patches), `mts` (mesh patches: multiresolution strips at
+    /// each cut) or `repair` (mesh patches: strips repaired by tunneling as the cut moves).
     #[arg(long, default_value = "list")]
     primitives: Primitives,
+    /// How strips are joined: `restart` (primitive restart) or `degenerate` (zero-area
+    /// windows); default: restart, degenerate on wgpu's GL backend.
+    #[arg(long)]
+    strip_joins: Option<patchwork::strips::Join>,
 
     /// Per-frame CSV.
     #[arg(long, default_value = "flythrough.csv")]
@@ -231,8 +237,9 @@ struct DrawArgs {
     /// Samples per pixel: 1 or 4.
     #[arg(long, default_value_t = 4, value_parser = parse_msaa)]
     msaa: u32,
-    /// Surface primitives: `list` (indexed triangles) or `strips` (triangle strips by
-    /// tunneling; static strips per arc for mesh patches).
+    /// Surface primitives: `list` (indexed triangles), `strips` (static triangle strips by
+    /// tunneling; per arc for mesh patches), `mts` (mesh patches: multiresolution strips at
+    /// each cut) or `repair` (mesh patches: strips repaired by tunneling as the cut moves).
     #[arg(long, default_value = "list")]
     primitives: Primitives,
 }
@@ -294,8 +301,9 @@ struct CheckArgs {
     /// Write actual and crack-mask images of views with cracks or growth into this folder.
     #[arg(long)]
     save_failures: Option<PathBuf>,
-    /// Surface primitives: `list` (indexed triangles) or `strips` (triangle strips by
-    /// tunneling; static strips per arc for mesh patches).
+    /// Surface primitives: `list` (indexed triangles), `strips` (static triangle strips by
+    /// tunneling; per arc for mesh patches), `mts` (mesh patches: multiresolution strips at
+    /// each cut) or `repair` (mesh patches: strips repaired by tunneling as the cut moves).
     #[arg(long, default_value = "list")]
     primitives: Primitives,
 }
@@ -437,13 +445,6 @@ fn report_failures(meshes: &[patchwork::tessellate::PatchMesh]) {
     }
 }
 
-/// Says when `--primitives strips` falls back to lists (GL backend).
-fn warn_strips(renderer: &Renderer) {
-    if renderer.primitives == Primitives::Strips && !renderer.strips_drawn() {
-        eprintln!("warning: primitive restart is broken on this backend: drawing lists");
-    }
-}
-
 fn cmd_render(args: &RenderArgs) -> Result<(), CliError> {
     let scene = load(&args.file)?;
     let view = make_view(&scene, &args.camera)?;
@@ -453,7 +454,6 @@ fn cmd_render(args: &RenderArgs) -> Result<(), CliError> {
     report_failures(&meshes);
     let mut renderer = Renderer::new()?;
     renderer.primitives = args.draw.primitives;
-    warn_strips(&renderer);
     eprintln!("adapter: {}", renderer.gpu().describe());
     let gpu = renderer.upload(&meshes);
     let opts = args.draw.options();
@@ -533,7 +533,6 @@ fn cmd_implode(args: &ImplodeArgs) -> Result<bool, CliError> {
         .map_err(|e| format!("{}: cannot create the folder: {e}", args.output.display()))?;
     let mut renderer = Renderer::new()?;
     renderer.primitives = args.draw.primitives;
-    warn_strips(&renderer);
     eprintln!("adapter: {}", renderer.gpu().describe());
     let opts = AnimOptions {
         frames: args.frames,
@@ -992,6 +991,9 @@ fn cmd_bench(args: &BenchArgs) -> Result<bool, CliError> {
     let mut renderer = Renderer::new()?;
     renderer.static_arcs = !args.upload_cuts;
     renderer.primitives = args.primitives;
+    if let Some(join) = args.strip_joins {
+        renderer.strip_join = join;
+    }
     eprintln!("adapter: {}", renderer.gpu().describe());
     let opts = FlythroughOptions {
         frames: args.frames,

@@ -265,6 +265,14 @@ fn bunny_drawn_with_strips_is_crack_free_with_fat_borders() {
     bunny_crack_free(patchwork::render::Primitives::Strips, 8);
 }
 
+/// The same check with strips that follow every view's cuts: multiresolution strips, and
+/// strips repaired by tunneling from one view's cuts to the next.
+#[test]
+fn bunny_drawn_with_cut_strips_is_crack_free_with_fat_borders() {
+    bunny_crack_free(patchwork::render::Primitives::Mts, 6);
+    bunny_crack_free(patchwork::render::Primitives::Repair, 6);
+}
+
 fn bunny_crack_free(primitives: patchwork::render::Primitives, views: usize) {
     let scene = bunny();
     let mut renderer = common::renderer();
@@ -331,25 +339,49 @@ fn bunny_golden_and_static_arcs_draw_what_uploaded_triangles_draw() {
         differ * 1000 <= (size.0 * size.1) as usize,
         "{differ} pixels differ between static arcs and uploaded triangles"
     );
-    // Static strips per arc: the same triangles, so the same image and the same golden.
+    // Static strips per arc, multiresolution strips at the cut, strips repaired along the
+    // cut: the same triangles, so the same image and the same golden.
+    use patchwork::render::Primitives;
+    use patchwork::strips::Join;
     renderer.static_arcs = true;
-    renderer.primitives = patchwork::render::Primitives::Strips;
-    let gpu = renderer.upload(&meshes);
-    assert_eq!(gpu.triangle_count() as usize, drawn);
-    // Arcs of ~5 triangles: a strip per arc costs its 2 extra vertices and a restart.
-    assert!(
-        !renderer.strips_drawn() || gpu.index_count() * 4 < 3 * 3 * drawn as u64,
-        "strips send {} indices for {drawn} triangles",
-        gpu.index_count()
-    );
-    let stripped = renderer.render(&gpu, &v, &opts).expect("render");
-    let differ = differing_pixels(&fixed, &stripped);
-    assert!(
-        differ * 1000 <= (size.0 * size.1) as usize,
-        "{differ} pixels differ between static arc strips and lists"
-    );
+    let mut frames = vec![("lists", fixed.clone())];
+    for (what, primitives) in [
+        ("strips", Primitives::Strips),
+        ("mts", Primitives::Mts),
+        ("repair", Primitives::Repair),
+    ] {
+        renderer.primitives = primitives;
+        let gpu = renderer.upload(&meshes);
+        assert_eq!(gpu.triangle_count() as usize, drawn);
+        assert_eq!(
+            gpu.static_range_count() > 0,
+            primitives == Primitives::Strips
+        );
+        // Static arcs of ~5 triangles pay a strip's 2 extra vertices and a join each
+        // (2.0 indices per triangle with restarts); strips of whole cuts fewer.
+        let per_triangle = gpu.index_count() as f64 / drawn as f64;
+        let bound = match (primitives, renderer.strip_join) {
+            (Primitives::Strips, Join::Restart) => 2.25,
+            (Primitives::Strips, Join::Degenerate) => 3.0,
+            (_, Join::Restart) => 1.75,
+            (_, Join::Degenerate) => 2.0,
+        };
+        assert!(
+            per_triangle < bound,
+            "{what}: {per_triangle} indices per triangle ({:?})",
+            renderer.strip_join
+        );
+        eprintln!("{what}: {per_triangle:.3} indices per triangle");
+        let frame = renderer.render(&gpu, &v, &opts).expect("render");
+        let differ = differing_pixels(&fixed, &frame);
+        assert!(
+            differ * 1000 <= (size.0 * size.1) as usize,
+            "{differ} pixels differ between {what} and lists"
+        );
+        frames.push((what, frame));
+    }
     let path = common::root().join("golden/mesh-bunny.png");
-    for (what, frame) in [("lists", &fixed), ("strips", &stripped)] {
+    for (what, frame) in &frames {
         match compare_with_golden(&path, &frame.to_rgba_image(), Thresholds::default()) {
             Ok(GoldenOutcome::Matched(score)) => eprintln!("mesh-bunny ({what}): {score:?}"),
             Ok(GoldenOutcome::Updated) => {

@@ -125,6 +125,8 @@ proptest! {
         let opts = TunnelOptions { repair_len, extra, ..Default::default() };
         let mut cs = CutStrips::new(&hier, opts);
         let mut cut = Vec::new();
+        let cache = patchwork::model::mesh::CutStripsCache::default();
+        let mut drawn = [Vec::new(), Vec::new()];
         for m in moves {
             let target = (cs.applied() as i64 + m as i64).clamp(1, hier.order.len() as i64) as usize;
             cs.move_to(&hier, target);
@@ -138,6 +140,12 @@ proptest! {
             }
             let idx = cs.strips.to_indices();
             prop_assert!(same_triangles(&decode(&idx.indices), &cut), "after moving to {}", target);
+            // What the renderer draws for `--primitives repair` and `mts`: the patch's cache
+            // following the same cuts.
+            for (k, mts) in [false, true].into_iter().enumerate() {
+                cache.cut_strips(&hier, target, mts, &mut drawn[k]);
+                prop_assert!(same_triangles(&decode(&drawn[k]), &cut), "mts {} at {}", mts, target);
+            }
         }
     }
 }
@@ -177,7 +185,7 @@ proptest! {
         let mut mapped = starts.clone();
         let joined = join_degenerate(&strips.indices, &mut mapped);
         prop_assert!(!joined.contains(&RESTART));
-        prop_assert_eq!(*mapped.last().unwrap() as usize, joined.len());
+        prop_assert_eq!(mapped.last().copied(), Some(joined.len() as u32));
         // Every range that draws something starts at an even index (parity kept).
         prop_assert!(mapped.iter().all(|&s| s % 2 == 0 || s as usize == joined.len()), "odd start in {:?}", mapped);
         let n = hier.arc_nodes.len();

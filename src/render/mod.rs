@@ -23,7 +23,10 @@ use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
 use glam::DVec3;
+use rayon::prelude::*;
 use wgpu::util::DeviceExt;
+
+use crate::strips::Join;
 
 use crate::tessellate::PatchMesh;
 use crate::view::View;
@@ -55,9 +58,27 @@ pub enum Primitives {
     /// Indexed triangle lists.
     #[default]
     List,
-    /// Triangle strips joined by primitive restart (`strips`): tunneling strips per
-    /// tessellated patch, static strips per arc of a mesh patch's hierarchy.
+    /// Static triangle strips (`strips`): tunneling strips per tessellated patch, static
+    /// strips per arc of a mesh patch's hierarchy (Holst §5.2).
     Strips,
+    /// Multiresolution strips (`mts`, Belmonte et al.): a mesh patch's strips extracted at
+    /// its cut's level whenever the cut moves (uploaded with the cut); tessellated patches as
+    /// `strips`.
+    Mts,
+    /// Strips repaired by tunneling (`repair`, Stewart §4.2): a mesh patch's strips follow
+    /// its cut one edge collapse / vertex split at a time (uploaded with the cut);
+    /// tessellated patches as `strips`.
+    Repair,
+}
+
+impl Primitives {
+    /// Every choice, as the CLI spells it.
+    pub const NAMES: &'static str = "list, strips, mts or repair";
+
+    /// Whether surfaces are drawn as triangle strips.
+    pub fn strips(self) -> bool {
+        self != Primitives::List
+    }
 }
 
 impl std::str::FromStr for Primitives {
@@ -66,7 +87,12 @@ impl std::str::FromStr for Primitives {
         match s {
             "list" => Ok(Primitives::List),
             "strips" => Ok(Primitives::Strips),
-            _ => Err(format!("primitives must be list or strips, not {s:?}")),
+            "mts" => Ok(Primitives::Mts),
+            "repair" => Ok(Primitives::Repair),
+            _ => Err(format!(
+                "primitives must be {}, not {s:?}",
+                Primitives::NAMES
+            )),
         }
     }
 }
@@ -249,9 +275,9 @@ struct StaticPatch {
 /// Size of one `DrawIndexedIndirectArgs`.
 const DRAW_ARGS_BYTES: u64 = 20;
 
-/// Cache key of a static patch: the patch's address, its id, its colour and whether it
-/// holds strips.
-type StaticKey = (usize, u32, [u8; 4], bool);
+/// Cache key of a static patch: the patch's address, its id, its colour and, when it holds
+/// strips, how they are joined.
+type StaticKey = (usize, u32, [u8; 4], Option<Join>);
 
 impl GpuMeshes {
     pub fn triangle_count(&self) -> u32 {
@@ -331,6 +357,10 @@ pub struct Renderer {
     pub static_arcs: bool,
     /// Triangle lists or strips for surfaces.
     pub primitives: Primitives,
+    /// How strips are joined: primitive restart, except on wgpu's GL backend, where
+    /// primitive restart draws wrong triangles (measured on llvmpipe-GL: 22 662 of 786 432
+    /// teapot pixels differ from lists) and zero-area windows join them.
+    pub strip_join: Join,
 }
 
 /// The textures, uniform and readback buffer one pass renders with; reused while the image
@@ -450,6 +480,7 @@ impl Renderer {
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(RenderError::Gpu(e.to_string()));
         }
+        let gpu_backend = gpu.info.backend;
         Ok(Renderer {
             gpu,
             module,
@@ -460,6 +491,11 @@ impl Renderer {
             statics: Mutex::new(HashMap::new()),
             static_arcs: true,
             primitives: Primitives::List,
+            strip_join: if gpu_backend == wgpu::Backend::Gl {
+                Join::Degenerate
+            } else {
+                Join::Restart
+            },
         })
     }
 
@@ -467,11 +503,12 @@ impl Renderer {
         &self.gpu
     }
 
-    /// Whether surfaces are really drawn as strips: on wgpu's GL backend primitive restart
-    /// draws wrong triangles (measured: 22 662 of 786 432 teapot pixels differ on llvmpipe-GL),
-    /// so `Primitives::Strips` falls back to lists there.
-    pub fn strips_drawn(&self) -> bool {
-        self.primitives == Primitives::Strips && self.gpu.info.backend != wgpu::Backend::Gl
+    /// Whether `m` is drawn as ranges of its patch's static buffers (a mesh-patch cut, with
+    /// lists or static strips).
+    fn draws_static(&self, m: &PatchMesh) -> bool {
+        m.arcs.is_some()
+            && self.static_arcs
+            && matches!(self.primitives, Primitives::List | Primitives::Strips)
     }
 
     /// Uploads patch meshes: surfaces and fat-border geometry ([`BorderGeometry`]).
@@ -480,12 +517,23 @@ impl Renderer {
         let mut vertices = Vec::new();
         let mut indices: Vec<u32> = Vec::new();
         let (mut statics, mut ranges, mut static_triangles) = (Vec::new(), Vec::new(), 0u32);
-        let strips = self.strips_drawn();
+        let strips = self.primitives.strips();
+        let join = strips.then_some(self.strip_join);
+        // The strips of every uploaded mesh, built (or extracted, or repaired) in parallel.
+        let primitives = self.primitives;
+        let uploaded_strips: Vec<Option<Arc<Vec<u32>>>> = if strips {
+            meshes
+                .par_iter()
+                .map(|m| (!self.draws_static(m)).then(|| strips_of(m, primitives)))
+                .collect()
+        } else {
+            Vec::new()
+        };
         let mut triangles = 0u32;
-        for m in meshes.iter().copied() {
-            if let Some(cut) = m.arcs.as_ref().filter(|_| self.static_arcs) {
+        for (i, m) in meshes.iter().copied().enumerate() {
+            if let Some(cut) = m.arcs.as_ref().filter(|_| self.draws_static(m)) {
                 let first = ranges.len() as u32;
-                let sp = self.static_patch(m, &cut.patch, strips);
+                let sp = self.static_patch(m, &cut.patch, join);
                 let arc_start = &cut.patch.hierarchy.arc_start;
                 for &[start, count] in &cut.ranges {
                     static_triangles += count;
@@ -510,21 +558,24 @@ impl Renderer {
                 packed_color(m.color),
             ));
             triangles += m.triangles.len() as u32;
-            if strips {
-                let s = m.strips.get(&m.triangles);
-                if !s.is_empty() && !indices.is_empty() {
-                    indices.push(crate::strips::RESTART);
-                }
-                indices.extend(s.iter().map(|&i| {
-                    if i == crate::strips::RESTART {
-                        i
-                    } else {
-                        base + i
+            match uploaded_strips.get(i).and_then(Option::as_ref) {
+                Some(s) => {
+                    if !s.is_empty() && !indices.is_empty() {
+                        indices.push(crate::strips::RESTART);
                     }
-                }));
-            } else {
-                indices.extend(m.triangles.iter().flatten().map(|i| base + i));
+                    indices.extend(s.iter().map(|&i| {
+                        if i == crate::strips::RESTART {
+                            i
+                        } else {
+                            base + i
+                        }
+                    }));
+                }
+                None => indices.extend(m.triangles.iter().flatten().map(|i| base + i)),
             }
+        }
+        if join == Some(Join::Degenerate) {
+            indices = crate::strips::join_degenerate(&indices, &mut []);
         }
         let borders = BorderGeometry::of(meshes.iter().copied());
         let init = |label, bytes: &[u8], usage| buffer_init(&self.gpu.device, label, bytes, usage);
@@ -585,10 +636,10 @@ impl Renderer {
         &self,
         m: &PatchMesh,
         patch: &Arc<crate::model::mesh::MeshPatch>,
-        strips: bool,
+        join: Option<Join>,
     ) -> Arc<StaticPatch> {
         let color = packed_color(m.color);
-        let key = (Arc::as_ptr(patch) as usize, m.patch_id, color, strips);
+        let key = (Arc::as_ptr(patch) as usize, m.patch_id, color, join);
         let mut cache = self.statics.lock().unwrap_or_else(|e| e.into_inner());
         if let Some(s) = cache.get(&key) {
             return s.clone();
@@ -616,15 +667,19 @@ impl Renderer {
                 bytemuck::cast_slice(&indices),
                 wgpu::BufferUsages::INDEX,
             ),
-            strips: strips.then(|| {
-                let (st, starts) = crate::strips::arc_strips(
+            strips: join.map(|join| {
+                let (st, mut starts) = crate::strips::arc_strips(
                     &patch.hierarchy,
                     &crate::strips::tunnel::TunnelOptions::default(),
                 );
+                let indices = match join {
+                    Join::Restart => st.indices,
+                    Join::Degenerate => crate::strips::join_degenerate(&st.indices, &mut starts),
+                };
                 StaticStrips {
                     indices: buffer(
                         "patch arc strips",
-                        bytemuck::cast_slice(&st.indices),
+                        bytemuck::cast_slice(&indices),
                         wgpu::BufferUsages::INDEX,
                     ),
                     starts,
@@ -1010,4 +1065,23 @@ fn read_texture(
     buffer.unmap();
     copied.map_err(|e| RenderError::Readback(e.to_string()))?;
     Ok(out)
+}
+
+/// The strips of an uploaded mesh, indices into its own vertices: for a mesh-patch cut with
+/// `mts` / `repair`, its hierarchy's multiresolution strips at the cut's level or its repaired
+/// cut strips; otherwise tunneling strips of its triangles (cached with the tessellation).
+fn strips_of(m: &PatchMesh, primitives: Primitives) -> Arc<Vec<u32>> {
+    match (&m.arcs, primitives) {
+        (Some(cut), Primitives::Mts | Primitives::Repair) => {
+            let mut out = Vec::new();
+            cut.patch.strips.cut_strips(
+                &cut.patch.hierarchy,
+                cut.applied,
+                primitives == Primitives::Mts,
+                &mut out,
+            );
+            Arc::new(out)
+        }
+        _ => m.strips.get(&m.triangles),
+    }
 }

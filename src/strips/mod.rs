@@ -59,7 +59,9 @@ impl std::str::FromStr for Join {
         match s {
             "restart" => Ok(Join::Restart),
             "degenerate" => Ok(Join::Degenerate),
-            _ => Err(format!("strip joins must be restart or degenerate, not {s:?}")),
+            _ => Err(format!(
+                "strip joins must be restart or degenerate, not {s:?}"
+            )),
         }
     }
 }

@@ -53,6 +53,9 @@ pub struct PatchMesh {
 pub struct CutRanges {
     pub patch: std::sync::Arc<crate::model::mesh::MeshPatch>,
     pub ranges: Vec<[u32; 2]>,
+    /// Nodes of the hierarchy's order the cut applies (the original mesh counts as one): the
+    /// cut's level for multiresolution / repaired strips.
+    pub applied: usize,
 }
 
 impl PatchMesh {
@@ -160,6 +163,7 @@ fn mesh_patch(
         out.arcs = Some(CutRanges {
             patch: m.clone(),
             ranges,
+            applied: state.applied(),
         });
     }
     out.eps_target = eps;
