@@ -1041,6 +1041,10 @@ fn cmd_bench(args: &BenchArgs) -> Result<bool, CliError> {
     );
     println!("initial tessellation      {:.1} ms", summary.initial_ms);
     println!(
+        "initial upload            {:.1} ms",
+        summary.initial_upload_ms
+    );
+    println!(
         "frame time                p50 {:.2} ms, p99 {:.2} ms",
         summary.p50_frame_ms, summary.p99_frame_ms
     );

@@ -400,3 +400,51 @@ fn differing_pixels(a: &patchwork::render::Frame, b: &patchwork::render::Frame) 
         .filter(|(a, b)| a.iter().zip(b.iter()).any(|(x, y)| x.abs_diff(*y) > 2))
         .count()
 }
+
+/// Mesh patches moved by an animation hold positions the static (assembled) buffers do not:
+/// they are uploaded, as triangles or with their cut's multiresolution / repaired strips,
+/// and every primitive choice draws the same picture of them.
+#[test]
+fn moved_mesh_patches_are_uploaded_with_their_cut_strips() {
+    use patchwork::render::{Primitives, RenderOptions};
+    use patchwork::view::{self, View};
+    let scene = bunny();
+    let size = (400, 300);
+    let fov = view::DEFAULT_FOV_Y_DEG.to_radians();
+    let v = View::framing(&scene.bounds, scene.up.vector(), fov, size);
+    let meshes = patchwork::tessellate::tessellate_scene(scene, &v, view::DEFAULT_PIXEL_ERROR);
+    // Every patch moved, every other one twice as far: gaps open between neighbours.
+    let r = scene.bounds.radius;
+    let offsets: Vec<glam::DVec3> = (0..scene.patches.len())
+        .map(|i| glam::DVec3::new(1.0, 0.5, 0.0) * r * 0.02 * (1 + i % 2) as f64)
+        .collect();
+    let moved = patchwork::anim::translated(meshes.iter().enumerate(), &offsets);
+    let drawn: usize = moved.iter().map(|m| m.triangles.len()).sum();
+    let opts = RenderOptions {
+        msaa: 4,
+        ..RenderOptions::default()
+    };
+    let mut renderer = common::renderer();
+    let mut frames = Vec::new();
+    for primitives in [Primitives::List, Primitives::Mts, Primitives::Repair] {
+        renderer.primitives = primitives;
+        let gpu = renderer.upload(&moved);
+        assert_eq!(gpu.static_range_count(), 0, "{primitives:?}: static ranges");
+        assert_eq!(gpu.triangle_count() as usize, drawn);
+        if primitives != Primitives::List {
+            assert!(
+                gpu.index_count() < 2 * drawn as u64,
+                "{primitives:?}: {} indices for {drawn} triangles",
+                gpu.index_count()
+            );
+        }
+        frames.push(renderer.render(&gpu, &v, &opts).expect("render"));
+    }
+    for (what, f) in ["mts", "repair"].iter().zip(&frames[1..]) {
+        let differ = differing_pixels(&frames[0], f);
+        assert!(
+            differ * 1000 <= (size.0 * size.1) as usize,
+            "{differ} pixels differ between moved {what} and lists"
+        );
+    }
+}

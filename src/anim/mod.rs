@@ -179,8 +179,9 @@ pub fn moved_scene(scene: &Scene, offsets: &[DVec3]) -> Scene {
 }
 
 /// Copies of `meshes` (with their patch indices) translated by their patch's offset. Moved
-/// mesh-patch cuts lose their static index ranges (the static buffers hold the assembled
-/// positions) and are uploaded as triangles.
+/// mesh-patch cuts are marked [`CutRanges::moved`](crate::tessellate::CutRanges::moved): the
+/// static buffers hold the assembled positions, so they are uploaded (as triangles, or with
+/// their multiresolution / repaired strips at the cut's level).
 pub fn translated<'a>(
     meshes: impl IntoIterator<Item = (usize, &'a PatchMesh)>,
     offsets: &[DVec3],
@@ -197,7 +198,9 @@ pub fn translated<'a>(
             for p in moved.positions.iter_mut() {
                 *p += o;
             }
-            moved.arcs = None;
+            if let Some(cut) = moved.arcs.as_mut() {
+                cut.moved = true;
+            }
             moved
         })
         .collect()

@@ -108,6 +108,9 @@ impl FrameRecord {
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct FlythroughSummary {
     pub initial_ms: f64,
+    /// First upload of the drawn meshes, before the first frame (builds static buffers and
+    /// strips).
+    pub initial_upload_ms: f64,
     pub jump_frame: usize,
     /// Wall time from the jump frame until every visible patch is within the pixel error
     /// (`None`: never within the run), and the frames it took.
@@ -142,7 +145,9 @@ pub fn run(
     let check = check_render_options(FatBorders::Six);
     let mut records = Vec::with_capacity(n);
     // GPU buffers are rebuilt only when the drawn meshes change.
+    let t0 = Instant::now();
     let mut gpu = renderer.upload(lod.meshes());
+    let initial_upload_ms = t0.elapsed().as_secs_f64() * 1e3;
     let mut uploaded = lod.generation();
     for i in 0..n {
         let view = camera_path(scene, i, n, opts.fov_y, opts.size);
@@ -197,7 +202,8 @@ pub fn run(
             lod.options.pixel_error = c.observe(stats.triangles, frame_time);
         }
     }
-    let summary = summarize(&records, initial_ms, jump_frames(n).1);
+    let mut summary = summarize(&records, initial_ms, jump_frames(n).1);
+    summary.initial_upload_ms = initial_upload_ms;
     Ok((records, summary))
 }
 
@@ -228,6 +234,7 @@ pub fn summarize(records: &[FrameRecord], initial_ms: f64, jump_frame: usize) ->
     let cracks: Vec<usize> = records.iter().filter_map(|r| r.crack_pixels).collect();
     FlythroughSummary {
         initial_ms,
+        initial_upload_ms: 0.0,
         jump_frame,
         converge_ms,
         converge_frames,

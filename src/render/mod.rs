@@ -506,7 +506,7 @@ impl Renderer {
     /// Whether `m` is drawn as ranges of its patch's static buffers (a mesh-patch cut, with
     /// lists or static strips).
     fn draws_static(&self, m: &PatchMesh) -> bool {
-        m.arcs.is_some()
+        m.arcs.as_ref().is_some_and(|cut| !cut.moved)
             && self.static_arcs
             && matches!(self.primitives, Primitives::List | Primitives::Strips)
     }

@@ -56,6 +56,9 @@ pub struct CutRanges {
     /// Nodes of the hierarchy's order the cut applies (the original mesh counts as one): the
     /// cut's level for multiresolution / repaired strips.
     pub applied: usize,
+    /// The mesh's positions are not the patch's (an animation moved them): the patch's
+    /// static buffers cannot draw it, so it is uploaded.
+    pub moved: bool,
 }
 
 impl PatchMesh {
@@ -164,6 +167,7 @@ fn mesh_patch(
             patch: m.clone(),
             ranges,
             applied: state.applied(),
+            moved: false,
         });
     }
     out.eps_target = eps;
