@@ -128,10 +128,12 @@ struct ViewArgs {
     /// With --implode: frames per implosion.
     #[arg(long, default_value_t = 60, requires = "implode")]
     implode_frames: usize,
-    /// Surface primitives: `list` (indexed triangles), `strips` (static triangle strips by
-    /// tunneling; per arc for mesh patches), `mts` (mesh patches: multiresolution strips at
-    /// each cut) or `repair` (mesh patches: strips repaired by tunneling as the cut moves).
-    #[arg(long, default_value = "list")]
+    /// Surface primitives: `auto` (lists for tessellated patches, multiresolution strips for
+    /// mesh patches: fastest measured), `list` (indexed triangles), `strips` (static triangle
+    /// strips by tunneling; per arc for mesh patches), `mts` (mesh patches: multiresolution
+    /// strips at each cut) or `repair` (mesh patches: strips repaired by tunneling as the cut
+    /// moves).
+    #[arg(long, default_value = "auto")]
     primitives: Primitives,
 }
 
@@ -167,10 +169,12 @@ struct BenchArgs {
     /// static per-patch buffers (for comparison).
     #[arg(long)]
     upload_cuts: bool,
-    /// Surface primitives: `list` (indexed triangles), `strips` (static triangle strips by
-    /// tunneling; per arc for mesh patches), `mts` (mesh patches: multiresolution strips at
-    /// each cut) or `repair` (mesh patches: strips repaired by tunneling as the cut moves).
-    #[arg(long, default_value = "list")]
+    /// Surface primitives: `auto` (lists for tessellated patches, multiresolution strips for
+    /// mesh patches: fastest measured), `list` (indexed triangles), `strips` (static triangle
+    /// strips by tunneling; per arc for mesh patches), `mts` (mesh patches: multiresolution
+    /// strips at each cut) or `repair` (mesh patches: strips repaired by tunneling as the cut
+    /// moves).
+    #[arg(long, default_value = "auto")]
     primitives: Primitives,
     /// How strips are joined: `restart` (primitive restart) or `degenerate` (zero-area
     /// windows); default: restart, degenerate on wgpu's GL backend.
@@ -237,10 +241,12 @@ struct DrawArgs {
     /// Samples per pixel: 1 or 4.
     #[arg(long, default_value_t = 4, value_parser = parse_msaa)]
     msaa: u32,
-    /// Surface primitives: `list` (indexed triangles), `strips` (static triangle strips by
-    /// tunneling; per arc for mesh patches), `mts` (mesh patches: multiresolution strips at
-    /// each cut) or `repair` (mesh patches: strips repaired by tunneling as the cut moves).
-    #[arg(long, default_value = "list")]
+    /// Surface primitives: `auto` (lists for tessellated patches, multiresolution strips for
+    /// mesh patches: fastest measured), `list` (indexed triangles), `strips` (static triangle
+    /// strips by tunneling; per arc for mesh patches), `mts` (mesh patches: multiresolution
+    /// strips at each cut) or `repair` (mesh patches: strips repaired by tunneling as the cut
+    /// moves).
+    #[arg(long, default_value = "auto")]
     primitives: Primitives,
 }
 
@@ -301,10 +307,12 @@ struct CheckArgs {
     /// Write actual and crack-mask images of views with cracks or growth into this folder.
     #[arg(long)]
     save_failures: Option<PathBuf>,
-    /// Surface primitives: `list` (indexed triangles), `strips` (static triangle strips by
-    /// tunneling; per arc for mesh patches), `mts` (mesh patches: multiresolution strips at
-    /// each cut) or `repair` (mesh patches: strips repaired by tunneling as the cut moves).
-    #[arg(long, default_value = "list")]
+    /// Surface primitives: `auto` (lists for tessellated patches, multiresolution strips for
+    /// mesh patches: fastest measured), `list` (indexed triangles), `strips` (static triangle
+    /// strips by tunneling; per arc for mesh patches), `mts` (mesh patches: multiresolution
+    /// strips at each cut) or `repair` (mesh patches: strips repaired by tunneling as the cut
+    /// moves).
+    #[arg(long, default_value = "auto")]
     primitives: Primitives,
 }
 

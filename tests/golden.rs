@@ -13,8 +13,9 @@ fn golden(name: &str, dir: Option<DVec3>) {
     golden_of(common::teapot(), name, dir)
 }
 
+/// With the default primitives (`auto`: lists for tessellated patches).
 fn golden_of(scene: patchwork::model::Scene, name: &str, dir: Option<DVec3>) {
-    golden_with(scene, name, dir, Primitives::List)
+    golden_with(scene, name, dir, Primitives::default())
 }
 
 /// Triangle strips draw the same triangles: the same goldens hold.
@@ -53,6 +54,12 @@ fn golden_with(
     let mut renderer = common::renderer();
     renderer.primitives = primitives;
     let gpu = renderer.upload(&meshes);
+    // Tessellated patches: lists unless strips are asked for.
+    let lists = 3 * gpu.triangle_count() as u64;
+    match primitives {
+        Primitives::Auto | Primitives::List => assert_eq!(gpu.index_count(), lists),
+        _ => assert!(gpu.index_count() < lists, "{name}: {}", gpu.index_count()),
+    }
     let opts = RenderOptions {
         shading: Shading::Lit,
         msaa: 4,

@@ -324,6 +324,7 @@ fn bunny_golden_and_static_arcs_draw_what_uploaded_triangles_draw() {
         ..RenderOptions::default()
     };
     let mut renderer = common::renderer();
+    renderer.primitives = patchwork::render::Primitives::List;
     let gpu = renderer.upload(&meshes);
     let drawn: usize = meshes.iter().map(|m| m.triangles.len()).sum();
     assert_eq!(gpu.triangle_count() as usize, drawn);
@@ -345,10 +346,12 @@ fn bunny_golden_and_static_arcs_draw_what_uploaded_triangles_draw() {
     use patchwork::strips::Join;
     renderer.static_arcs = true;
     let mut frames = vec![("lists", fixed.clone())];
+    let mut counts = Vec::new();
     for (what, primitives) in [
         ("strips", Primitives::Strips),
         ("mts", Primitives::Mts),
         ("repair", Primitives::Repair),
+        ("auto", Primitives::Auto),
     ] {
         renderer.primitives = primitives;
         let gpu = renderer.upload(&meshes);
@@ -372,6 +375,11 @@ fn bunny_golden_and_static_arcs_draw_what_uploaded_triangles_draw() {
             renderer.strip_join
         );
         eprintln!("{what}: {per_triangle:.3} indices per triangle");
+        counts.push(gpu.index_count());
+        if primitives == Primitives::Auto {
+            // Every bunny patch is a mesh patch: `auto` draws them as `mts` does.
+            assert_eq!(counts[3], counts[1], "auto vs mts indices");
+        }
         let frame = renderer.render(&gpu, &v, &opts).expect("render");
         let differ = differing_pixels(&fixed, &frame);
         assert!(

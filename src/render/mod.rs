@@ -55,8 +55,11 @@ impl std::str::FromStr for Shading {
 /// How surfaces are sent to the GPU.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum Primitives {
-    /// Indexed triangle lists.
+    /// What measured fastest on our models (`auto`, the default): triangle lists for
+    /// tessellated patches, multiresolution strips for mesh-patch cuts (as [`Primitives::Mts`]).
     #[default]
+    Auto,
+    /// Indexed triangle lists.
     List,
     /// Static triangle strips (`strips`): tunneling strips per tessellated patch, static
     /// strips per arc of a mesh patch's hierarchy (Holst §5.2).
@@ -73,11 +76,15 @@ pub enum Primitives {
 
 impl Primitives {
     /// Every choice, as the CLI spells it.
-    pub const NAMES: &'static str = "list, strips, mts or repair";
+    pub const NAMES: &'static str = "auto, list, strips, mts or repair";
 
-    /// Whether surfaces are drawn as triangle strips.
-    pub fn strips(self) -> bool {
-        self != Primitives::List
+    /// Whether `m` is drawn as triangle strips.
+    pub fn strips_for(self, m: &PatchMesh) -> bool {
+        match self {
+            Primitives::List => false,
+            Primitives::Auto => m.arcs.is_some(),
+            Primitives::Strips | Primitives::Mts | Primitives::Repair => true,
+        }
     }
 }
 
@@ -85,6 +92,7 @@ impl std::str::FromStr for Primitives {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
         match s {
+            "auto" => Ok(Primitives::Auto),
             "list" => Ok(Primitives::List),
             "strips" => Ok(Primitives::Strips),
             "mts" => Ok(Primitives::Mts),
@@ -232,11 +240,13 @@ pub(crate) fn packed_color(c: Option<[f32; 3]>) -> [u8; 4] {
 #[derive(Debug)]
 pub struct GpuMeshes {
     vertices: wgpu::Buffer,
+    /// Triangle lists of the uploaded meshes drawn as lists.
     indices: wgpu::Buffer,
     index_count: u32,
-    /// Whether `indices` and the static ranges are strips (else lists).
-    strips: bool,
-    /// Surface triangles uploaded in `indices`.
+    /// Strips of the uploaded meshes drawn as strips.
+    strip_indices: wgpu::Buffer,
+    strip_index_count: u32,
+    /// Surface triangles uploaded in `indices` and `strip_indices`.
     triangles: u32,
     border_vertices: wgpu::Buffer,
     /// Index buffers for the 6-, 4- and 2-vertex variants, with their index counts.
@@ -286,7 +296,9 @@ impl GpuMeshes {
 
     /// Surface indices a draw sends (uploaded and static ranges; restarts and swaps included).
     pub fn index_count(&self) -> u64 {
-        self.index_count as u64 + self.ranges.iter().map(|r| r[1] as u64).sum::<u64>()
+        self.index_count as u64
+            + self.strip_index_count as u64
+            + self.ranges.iter().map(|r| r[1] as u64).sum::<u64>()
     }
 
     /// Index ranges drawn from static per-patch buffers (after merging adjacent arcs).
@@ -515,24 +527,23 @@ impl Renderer {
     pub fn upload<'a>(&self, meshes: impl IntoIterator<Item = &'a PatchMesh>) -> GpuMeshes {
         let meshes: Vec<&PatchMesh> = meshes.into_iter().collect();
         let mut vertices = Vec::new();
-        let mut indices: Vec<u32> = Vec::new();
+        let (mut indices, mut strip_indices): (Vec<u32>, Vec<u32>) = Default::default();
         let (mut statics, mut ranges, mut static_triangles) = (Vec::new(), Vec::new(), 0u32);
-        let strips = self.primitives.strips();
-        let join = strips.then_some(self.strip_join);
-        // The strips of every uploaded mesh, built (or extracted, or repaired) in parallel.
         let primitives = self.primitives;
-        let uploaded_strips: Vec<Option<Arc<Vec<u32>>>> = if strips {
-            meshes
-                .par_iter()
-                .map(|m| (!self.draws_static(m)).then(|| strips_of(m, primitives)))
-                .collect()
-        } else {
-            Vec::new()
-        };
+        // The strips of every uploaded mesh drawn as strips, built (or extracted, or
+        // repaired) in parallel.
+        let uploaded_strips: Vec<Option<Arc<Vec<u32>>>> = meshes
+            .par_iter()
+            .map(|m| {
+                (primitives.strips_for(m) && !self.draws_static(m))
+                    .then(|| strips_of(m, primitives))
+            })
+            .collect();
         let mut triangles = 0u32;
         for (i, m) in meshes.iter().copied().enumerate() {
             if let Some(cut) = m.arcs.as_ref().filter(|_| self.draws_static(m)) {
                 let first = ranges.len() as u32;
+                let join = primitives.strips_for(m).then_some(self.strip_join);
                 let sp = self.static_patch(m, &cut.patch, join);
                 let arc_start = &cut.patch.hierarchy.arc_start;
                 for &[start, count] in &cut.ranges {
@@ -560,10 +571,10 @@ impl Renderer {
             triangles += m.triangles.len() as u32;
             match uploaded_strips.get(i).and_then(Option::as_ref) {
                 Some(s) => {
-                    if !s.is_empty() && !indices.is_empty() {
-                        indices.push(crate::strips::RESTART);
+                    if !s.is_empty() && !strip_indices.is_empty() {
+                        strip_indices.push(crate::strips::RESTART);
                     }
-                    indices.extend(s.iter().map(|&i| {
+                    strip_indices.extend(s.iter().map(|&i| {
                         if i == crate::strips::RESTART {
                             i
                         } else {
@@ -574,8 +585,8 @@ impl Renderer {
                 None => indices.extend(m.triangles.iter().flatten().map(|i| base + i)),
             }
         }
-        if join == Some(Join::Degenerate) {
-            indices = crate::strips::join_degenerate(&indices, &mut []);
+        if self.strip_join == Join::Degenerate {
+            strip_indices = crate::strips::join_degenerate(&strip_indices, &mut []);
         }
         let borders = BorderGeometry::of(meshes.iter().copied());
         let init = |label, bytes: &[u8], usage| buffer_init(&self.gpu.device, label, bytes, usage);
@@ -591,7 +602,12 @@ impl Renderer {
                 wgpu::BufferUsages::INDEX,
             ),
             index_count: indices.len() as u32,
-            strips,
+            strip_indices: init(
+                "strip indices",
+                bytemuck::cast_slice(&strip_indices),
+                wgpu::BufferUsages::INDEX,
+            ),
+            strip_index_count: strip_indices.len() as u32,
             triangles,
             border_vertices: init(
                 "fat border vertices",
@@ -968,20 +984,27 @@ impl Renderer {
                 multiview_mask: None,
             });
             pass.set_bind_group(0, bind, &[]);
-            let surface = if meshes.strips {
-                &pipes.surface_strip
-            } else {
-                &pipes.surface
-            };
-            if meshes.index_count > 0 {
-                pass.set_pipeline(surface);
-                pass.set_vertex_buffer(0, meshes.vertices.slice(..));
-                pass.set_index_buffer(meshes.indices.slice(..), wgpu::IndexFormat::Uint32);
-                pass.draw_indexed(0..meshes.index_count, 0, 0..1);
+            for (pipeline, indices, count) in [
+                (&pipes.surface, &meshes.indices, meshes.index_count),
+                (
+                    &pipes.surface_strip,
+                    &meshes.strip_indices,
+                    meshes.strip_index_count,
+                ),
+            ] {
+                if count > 0 {
+                    pass.set_pipeline(pipeline);
+                    pass.set_vertex_buffer(0, meshes.vertices.slice(..));
+                    pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
+                    pass.draw_indexed(0..count, 0, 0..1);
+                }
             }
             if !meshes.statics.is_empty() {
-                pass.set_pipeline(surface);
                 for (patch, first, count) in &meshes.statics {
+                    pass.set_pipeline(match patch.strips {
+                        Some(_) => &pipes.surface_strip,
+                        None => &pipes.surface,
+                    });
                     pass.set_vertex_buffer(0, patch.vertices.slice(..));
                     let indices = patch.strips.as_ref().map_or(&patch.indices, |s| &s.indices);
                     pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
@@ -1068,16 +1091,17 @@ fn read_texture(
 }
 
 /// The strips of an uploaded mesh, indices into its own vertices: for a mesh-patch cut with
-/// `mts` / `repair`, its hierarchy's multiresolution strips at the cut's level or its repaired
-/// cut strips; otherwise tunneling strips of its triangles (cached with the tessellation).
+/// `auto` / `mts` / `repair`, its hierarchy's multiresolution strips at the cut's level or its
+/// repaired cut strips; otherwise tunneling strips of its triangles (cached with the
+/// tessellation).
 fn strips_of(m: &PatchMesh, primitives: Primitives) -> Arc<Vec<u32>> {
     match (&m.arcs, primitives) {
-        (Some(cut), Primitives::Mts | Primitives::Repair) => {
+        (Some(cut), Primitives::Auto | Primitives::Mts | Primitives::Repair) => {
             let mut out = Vec::new();
             cut.patch.strips.cut_strips(
                 &cut.patch.hierarchy,
                 cut.applied,
-                primitives == Primitives::Mts,
+                primitives != Primitives::Repair,
                 &mut out,
             );
             Arc::new(out)
