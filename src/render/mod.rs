@@ -27,7 +27,6 @@ use rayon::prelude::*;
 use wgpu::util::DeviceExt;
 
 use crate::strips::Join;
-
 use crate::tessellate::PatchMesh;
 use crate::view::View;
 
@@ -502,7 +501,7 @@ impl Renderer {
             targets: HashMap::new(),
             statics: Mutex::new(HashMap::new()),
             static_arcs: true,
-            primitives: Primitives::List,
+            primitives: Primitives::default(),
             strip_join: if gpu_backend == wgpu::Backend::Gl {
                 Join::Degenerate
             } else {
