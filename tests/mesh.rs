@@ -305,18 +305,15 @@ fn bunny_crack_free(primitives: patchwork::render::Primitives, views: usize) {
     assert!(r.total(patchwork::render::FatBorders::Off).cracks() > 0);
 }
 
-/// The bunny drawn through its hierarchies' static per-arc buffers (the default) against the
-/// golden, and against the same cuts uploaded as plain triangles: the same image.
+/// The bunny drawn as lists through its hierarchies' static per-arc buffers against the
+/// golden, against the same cuts uploaded as plain triangles, and with every strip choice:
+/// the same image.
 #[test]
 fn bunny_golden_and_static_arcs_draw_what_uploaded_triangles_draw() {
     use patchwork::check::golden::{GoldenOutcome, Thresholds, compare_with_golden};
     use patchwork::render::{RenderOptions, Shading};
-    use patchwork::view::{self, View};
-    let scene = bunny();
     let size = (400, 300);
-    let fov = view::DEFAULT_FOV_Y_DEG.to_radians();
-    let v = View::framing(&scene.bounds, scene.up.vector(), fov, size);
-    let meshes = patchwork::tessellate::tessellate_scene(scene, &v, view::DEFAULT_PIXEL_ERROR);
+    let (v, meshes) = framed_bunny(size);
     assert!(meshes.iter().all(|m| m.arcs.is_some()), "cuts carry ranges");
     let opts = RenderOptions {
         shading: Shading::Lit,
@@ -400,6 +397,19 @@ fn bunny_golden_and_static_arcs_draw_what_uploaded_triangles_draw() {
     }
 }
 
+/// The bunny framed from the default direction at `size`, tessellated at the default pixel
+/// error.
+fn framed_bunny(
+    size: (u32, u32),
+) -> (patchwork::view::View, Vec<patchwork::tessellate::PatchMesh>) {
+    use patchwork::view::{self, View};
+    let scene = bunny();
+    let fov = view::DEFAULT_FOV_Y_DEG.to_radians();
+    let v = View::framing(&scene.bounds, scene.up.vector(), fov, size);
+    let meshes = patchwork::tessellate::tessellate_scene(scene, &v, view::DEFAULT_PIXEL_ERROR);
+    (v, meshes)
+}
+
 /// Pixels whose colour differs by more than 2 in some channel.
 fn differing_pixels(a: &patchwork::render::Frame, b: &patchwork::render::Frame) -> usize {
     a.color
@@ -415,12 +425,9 @@ fn differing_pixels(a: &patchwork::render::Frame, b: &patchwork::render::Frame) 
 #[test]
 fn moved_mesh_patches_are_uploaded_with_their_cut_strips() {
     use patchwork::render::{Primitives, RenderOptions};
-    use patchwork::view::{self, View};
     let scene = bunny();
     let size = (400, 300);
-    let fov = view::DEFAULT_FOV_Y_DEG.to_radians();
-    let v = View::framing(&scene.bounds, scene.up.vector(), fov, size);
-    let meshes = patchwork::tessellate::tessellate_scene(scene, &v, view::DEFAULT_PIXEL_ERROR);
+    let (v, meshes) = framed_bunny(size);
     // Every patch moved, every other one twice as far: gaps open between neighbours.
     let r = scene.bounds.radius;
     let offsets: Vec<glam::DVec3> = (0..scene.patches.len())
