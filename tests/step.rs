@@ -395,3 +395,102 @@ fn export_writes_one_mesh_per_part_and_one_node_per_placement() {
     assert!(!status.success());
     assert!(!bad.exists());
 }
+
+/// Geometry the file states twice must agree: every edge curve of a face lies on the face's
+/// surface. A surface read wrongly (a cone's semi-angle in degrees taken as radians, as
+/// truck-stepio does) moves the surface off its exact edges, which no tessellation error
+/// measured against that same surface can see.
+#[test]
+fn every_edge_lies_on_the_surface_of_its_faces() {
+    use patchwork::model::trimmed::SurfaceEval;
+    for file in CLOSED {
+        let scene = common::load(file);
+        let mut worst = (0.0f64, 0u64);
+        for p in &scene.patches {
+            let PatchSurface::Trimmed(face) = &p.surface else {
+                continue;
+            };
+            // Far below any drawing tolerance, above the files' own uncertainties (≤ 0.05 mm).
+            let tol = 1e-4 * scene.bounds.radius + 0.06;
+            for le in face.loops.iter().flatten() {
+                let e = &le.edge;
+                for k in 1..8 {
+                    let t = e.t0 + (e.t1 - e.t0) * k as f64 / 8.0;
+                    let q = e.point(t);
+                    let d = face
+                        .project(q, None)
+                        .map_or(f64::INFINITY, |uv| face.point(uv).distance(q));
+                    if d / tol > worst.0 {
+                        worst = (d / tol, face.id);
+                    }
+                }
+            }
+        }
+        assert!(
+            worst.0 <= 1.0,
+            "{file}: an edge of face #{} lies {:.1}× the tolerance off its surface",
+            worst.1,
+            worst.0
+        );
+    }
+}
+
+/// The apex of a cone face is a `VERTEX_LOOP`: the vertex must lie on the cone as read. NIST
+/// CTC-01 writes its two cones' semi-angles in degrees (59), which truck-stepio alone reads as
+/// radians: the cones then miss their apexes by tens of millimetres.
+#[test]
+fn vertex_loops_lie_on_their_surface() {
+    use patchwork::io::step::p21;
+    use patchwork::model::trimmed::SurfaceEval;
+    let mut checked = 0;
+    for file in CLOSED {
+        let scene = common::load(file);
+        let text =
+            std::fs::read_to_string(common::root().join("models").join(file)).expect("readable");
+        let p21 = p21::parse(&text).expect("parses");
+        for p in &scene.patches {
+            let PatchSurface::Trimmed(face) = &p.surface else {
+                continue;
+            };
+            let Some(bounds) = p21
+                .get(face.id)
+                .and_then(|e| e.record())
+                .and_then(|r| r.list_at(1))
+            else {
+                continue;
+            };
+            for b in bounds.iter().filter_map(p21::Param::as_ref) {
+                let point = p21
+                    .get(b)
+                    .and_then(|e| e.record())
+                    .and_then(|r| r.ref_at(1))
+                    .and_then(|l| p21.get(l))
+                    .and_then(|l| l.part("VERTEX_LOOP"))
+                    .and_then(|l| l.ref_at(1))
+                    .and_then(|v| p21.get(v)?.part("VERTEX_POINT")?.ref_at(1))
+                    .and_then(|c| {
+                        p21.get(c)?
+                            .part("CARTESIAN_POINT")?
+                            .list_at(1)
+                            .map(<[_]>::to_vec)
+                    });
+                let Some(c) = point else { continue };
+                let c: Vec<f64> = c.iter().filter_map(p21::Param::as_f64).collect();
+                let q = glam::DVec3::new(c[0], c[1], c[2]);
+                let d = face
+                    .project(q, None)
+                    .map_or(f64::INFINITY, |uv| face.point(uv).distance(q));
+                assert!(
+                    d <= 1e-6 * (1.0 + q.length()),
+                    "{file}: the vertex loop of face #{} lies {d} off its surface",
+                    face.id
+                );
+                checked += 1;
+            }
+        }
+    }
+    assert!(
+        checked >= 2,
+        "the CTC-01 cones' apexes were not found ({checked})"
+    );
+}

@@ -132,9 +132,18 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
     for &shell in &shells {
         let ids = shell_faces(&file, shell);
         for &f in &ids {
-            let r = isolated(|| convert_face(&file, &table, &vertex_loops, f, &mut edges))
-                .and_then(|r| r)
-                .map_err(|e| e.to_string());
+            let r = isolated(|| {
+                convert_face(
+                    &file,
+                    &table,
+                    &vertex_loops,
+                    structure.plane_angle_rad,
+                    f,
+                    &mut edges,
+                )
+            })
+            .and_then(|r| r)
+            .map_err(|e| e.to_string());
             converted.push((f, r));
         }
         face_ids.insert(shell, ids);
@@ -298,6 +307,7 @@ fn convert_face(
     file: &p21::P21File,
     table: &Table,
     vertex_loops: &std::collections::HashSet<u64>,
+    angle_rad: Option<f64>,
     id: u64,
     edges: &mut HashMap<u64, Arc<TrimEdge>>,
 ) -> Result<TrimmedFace, String> {
@@ -319,6 +329,14 @@ fn convert_face(
         .map_err(|e| format!("surface: {e}"))?;
     let mut surface =
         TruckSurface::try_from(&surface_any).map_err(|e| format!("surface not supported: {e}"))?;
+    if let Some(rad) = angle_rad
+        && (rad - 1.0).abs() > 1e-12
+        && let Some(cone) = cone_from_file(file, id, rad)
+    {
+        // truck-stepio reads a CONICAL_SURFACE's semi-angle as radians whatever the file's
+        // plane-angle unit (many writers use degrees).
+        surface = cone;
+    }
     if !surface_is_finite(&surface) {
         // truck-stepio leaves NaNs in a plane whose placement has no usable reference
         // direction; rebuild it from the placement as we read it.
@@ -408,12 +426,55 @@ fn surface_is_finite(s: &TruckSurface) -> bool {
         .all(|&(u, v)| s.point(glam::DVec2::new(u, v)).is_finite())
 }
 
+/// The surface entity of face `face`: `ADVANCED_FACE(name, bounds, #surface, sense)`, also
+/// through an `ORIENTED_FACE(name, *, #face, orientation)`.
+fn face_geometry(file: &p21::P21File, face: u64) -> Option<u64> {
+    let mut f = file.get(face)?.record()?;
+    if f.name == "ORIENTED_FACE" {
+        f = file.get(f.ref_at(2)?)?.record()?;
+    }
+    f.ref_at(2)
+}
+
+/// The cone of face `face` (`ADVANCED_FACE(name, bounds, #CONICAL_SURFACE, sense)`) with its
+/// semi-angle converted by `rad` radians per file unit, parametrised as truck-stepio does
+/// (the line `(r, 0, 0) + t (tan α, 0, 1)` revolved about the placement's z axis, inverted).
+fn cone_from_file(file: &p21::P21File, face: u64, rad: f64) -> Option<TruckSurface> {
+    use truck_stepio::r#in::alias::ElementarySurface;
+    use truck_stepio::r#in::alias::re_exports::{
+        Invertible, Line, Matrix4, Processor, RevolutedCurve, Transformed, Vector3,
+    };
+    let cone = file.get(face_geometry(file, face)?)?;
+    let rec = cone.part("CONICAL_SURFACE")?;
+    let m = structure::placement(file, rec.ref_at(1)?)?;
+    let radius = rec.f64_at(2)?;
+    let angle = rec.f64_at(3)? * rad;
+    if !(radius.is_finite() && angle.is_finite() && angle.abs() < std::f64::consts::FRAC_PI_2) {
+        return None;
+    }
+    let p = Point3::new(radius, 0.0, 0.0);
+    let v = Vector3::new(angle.tan(), 0.0, 1.0);
+    let rev = RevolutedCurve::by_revolution(
+        Line(p, p + v),
+        Point3::new(0.0, 0.0, 0.0),
+        Vector3::unit_z(),
+    );
+    let mut processor = Processor::new(rev);
+    let c = m.to_cols_array();
+    processor.transform_by(Matrix4::new(
+        c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7], c[8], c[9], c[10], c[11], c[12], c[13],
+        c[14], c[15],
+    ));
+    processor.invert();
+    let s = TruckSurface::ElementarySurface(Box::new(ElementarySurface::ConicalSurface(processor)));
+    surface_is_finite(&s).then_some(s)
+}
+
 /// The plane of face `face` (`ADVANCED_FACE(name, bounds, #PLANE, sense)`) from its placement.
 fn plane_from_file(file: &p21::P21File, face: u64) -> Option<TruckSurface> {
     use truck_stepio::r#in::alias::ElementarySurface;
     use truck_stepio::r#in::alias::re_exports::Plane;
-    let f = file.get(face)?.record()?;
-    let plane = file.get(f.ref_at(2)?)?;
+    let plane = file.get(face_geometry(file, face)?)?;
     let rec = plane.part("PLANE")?;
     let m = structure::placement(file, rec.ref_at(1)?)?;
     let o = m.w_axis.truncate();

@@ -122,6 +122,14 @@ pub struct Structure {
     /// `CONVERSION_BASED_UNIT('INCH', …)` → 25.4), from the contexts of the representations
     /// that hold the shells; `None` if the file does not say.
     pub length_unit_mm: Option<f64>,
+    /// How many radians one file plane-angle unit is (`SI_UNIT($,.RADIAN.)` → 1,
+    /// `CONVERSION_BASED_UNIT('DEGREE', …)` → π/180); `None` if the file does not say. Angles
+    /// in the geometry (a `CONICAL_SURFACE`'s semi-angle) are in this unit.
+    pub plane_angle_rad: Option<f64>,
+    /// The file's distance uncertainty (`UNCERTAINTY_MEASURE_WITH_UNIT` of a
+    /// `GLOBAL_UNCERTAINTY_ASSIGNED_CONTEXT`, the largest if several), in file length units: how
+    /// far the writer's vertices may lie from their curves and surfaces.
+    pub uncertainty: Option<f64>,
     /// Human-readable notes (e.g. "2 shells not reached from any product; placed at identity").
     pub warnings: Vec<String>,
 }
@@ -191,6 +199,9 @@ pub fn analyse(file: &P21File) -> Structure {
     // Pass 2: groups not reached, roots first, then any left (children of unreached parents,
     // members of cycles with no way in).
     let before = walk.instances.len();
+    // A shell the product structure placed is never drawn again from the identity (OCCT
+    // transfers what the products reach): representations left over may repeat it.
+    walk.placed = walk.instances.iter().map(|i| i.shell).collect();
     for children_too in [false, true] {
         for g in 0..graph.groups.len() {
             if !walk.visited_groups.contains(&g)
@@ -201,6 +212,13 @@ pub fn analyse(file: &P21File) -> Structure {
         }
     }
     let unreached = walk.instances.len() - before;
+    if walk.repeated > 0 {
+        warnings.push(format!(
+            "{} shells of representations not reached from any product are placed by the \
+             product structure already; not drawn again",
+            walk.repeated
+        ));
+    }
     if unreached > 0 {
         warnings.push(format!(
             "{unreached} shells in representations not reached from any {}; placed from the \
@@ -265,6 +283,8 @@ pub fn analyse(file: &P21File) -> Structure {
         colors: colours(file),
         unsupported: unsupported(file),
         length_unit_mm,
+        plane_angle_rad: plane_angle_unit(file),
+        uncertainty: uncertainty(file),
         warnings,
     }
 }
@@ -587,6 +607,7 @@ impl Graph {
         }
 
         // Relationships between representations.
+        let mut reversed = 0;
         for e in &file.entities {
             let Some(rel) = e.parts.iter().find(|r| {
                 r.name.contains("REPRESENTATION_RELATIONSHIP")
@@ -614,9 +635,31 @@ impl Graph {
                     let t = t.args.last().and_then(Param::as_ref);
                     let m = transformation(file, t, &mut log);
                     let (name, part) = rel_occurrence.get(&e.id).cloned().unwrap_or_default();
-                    directed.push((rep2, rep1, m, name, part));
+                    // Some writers swap rep_1 and rep_2: the occurrence's child product says
+                    // which representation is the component's (OCCT's
+                    // `STEPConstruct_Assembly::CheckSRRReversesNAUO`); the transformation then
+                    // maps rep_2 into rep_1 and is inverted.
+                    let is_child =
+                        |rep: u64| part.is_some() && g.rep_part.get(&rep) == part.as_ref();
+                    if !is_child(rep1) && is_child(rep2) {
+                        let inverted = inverse(m).unwrap_or_else(|| {
+                            log.bad.push(e.id);
+                            DMat4::IDENTITY
+                        });
+                        reversed += 1;
+                        directed.push((rep1, rep2, inverted, name, part));
+                    } else {
+                        directed.push((rep2, rep1, m, name, part));
+                    }
                 }
             }
+        }
+
+        if reversed > 0 {
+            warnings.push(format!(
+                "{reversed} assembly relationships list the parent before the component \
+                 (rep_1/rep_2 swapped); read as their occurrence says"
+            ));
         }
 
         // Groups: connected components of the identity links, members in file order.
@@ -702,6 +745,10 @@ struct Walk {
     /// Product-less shell → its `shell #id` part.
     shell_parts: HashMap<u64, usize>,
     visited_groups: HashSet<usize>,
+    /// Shells placed from the products (pass 1): not emitted again by later passes.
+    placed: HashSet<u64>,
+    /// Shells skipped because of `placed`.
+    repeated: usize,
     on_path: Vec<usize>,
     names: Vec<String>,
     cycles: usize,
@@ -754,6 +801,10 @@ impl Walk {
         for (rep, shells) in &g.members {
             let rep_part = graph.rep_part.get(rep).copied().or(group_part);
             for &(shell, solid) in shells {
+                if self.placed.contains(&shell) {
+                    self.repeated += 1;
+                    continue;
+                }
                 if self.instances.len() >= MAX_INSTANCES {
                     self.truncated = true;
                     break;
@@ -1154,6 +1205,57 @@ fn unit_mm(file: &P21File, id: u64, depth: usize) -> Option<f64> {
     (mm.is_finite() && mm > 0.0).then_some(mm)
 }
 
+/// Radians in the plane-angle unit of the first context that names one.
+fn plane_angle_unit(file: &P21File) -> Option<f64> {
+    file.entities
+        .iter()
+        .filter_map(|e| e.part("GLOBAL_UNIT_ASSIGNED_CONTEXT"))
+        .filter_map(|r| r.list_at(0))
+        .flat_map(|units| units.iter().filter_map(Param::as_ref))
+        .find_map(|u| unit_rad(file, u, 0))
+}
+
+/// Radians in plane-angle unit `id` (`None` if it is not a plane-angle unit).
+fn unit_rad(file: &P21File, id: u64, depth: usize) -> Option<f64> {
+    if depth > 8 {
+        return None;
+    }
+    let e = file.get(id)?;
+    let rad = if let Some(si) = e.part("SI_UNIT") {
+        let n = si.args.len();
+        if n < 2 || si.args.get(n - 1)?.as_enum()? != "RADIAN" {
+            return None;
+        }
+        match si.args.get(n - 2)?.as_enum() {
+            None => 1.0,
+            Some(p) => si_prefix(p)?,
+        }
+    } else if let Some(cbu) = e.part("CONVERSION_BASED_UNIT") {
+        if !e.has("PLANE_ANGLE_UNIT") {
+            return None;
+        }
+        let factor = file.get(cbu.ref_at(1)?)?;
+        let measure = factor
+            .parts
+            .iter()
+            .find(|r| r.f64_at(0).is_some() && r.ref_at(1).is_some())?;
+        measure.f64_at(0)? * unit_rad(file, measure.ref_at(1)?, depth + 1)?
+    } else {
+        return None;
+    };
+    (rad.is_finite() && rad > 0.0).then_some(rad)
+}
+
+/// The largest distance uncertainty any context declares (file length units).
+fn uncertainty(file: &P21File) -> Option<f64> {
+    file.entities
+        .iter()
+        .filter_map(|e| e.part("UNCERTAINTY_MEASURE_WITH_UNIT"))
+        .filter_map(|r| r.f64_at(0))
+        .filter(|u| u.is_finite() && *u > 0.0)
+        .reduce(f64::max)
+}
+
 fn si_prefix(p: &str) -> Option<f64> {
     Some(match p {
         "EXA" => 1e18,
@@ -1395,6 +1497,61 @@ mod tests {
         #62=CONTEXT_DEPENDENT_SHAPE_REPRESENTATION(#60,#63);
         #63=PRODUCT_DEFINITION_SHAPE('','',#64);
         #64=NEXT_ASSEMBLY_USAGE_OCCURRENCE('2','','',#100,#200,$);";
+
+    /// Both placements of [`ASSEMBLY`], whatever order a writer lists the representations in.
+    fn assert_assembly_placements(s: &Structure) {
+        assert_eq!(s.instances.len(), 2, "{:?}", s.instances);
+        let expected = DMat4::from_cols_array(&[
+            0.0, 1.0, 0.0, 0.0, //
+            0.0, 0.0, 1.0, 0.0, //
+            1.0, 0.0, 0.0, 0.0, //
+            3.0, 0.0, 0.0, 1.0,
+        ]);
+        assert_close(s.instances[0].transform, expected);
+        assert_close(
+            s.instances[1].transform,
+            DMat4::from_translation(DVec3::new(0.0, 7.0, 0.0)),
+        );
+    }
+
+    /// A writer that lists the assembly's representation as rep_1 and the component's as
+    /// rep_2 (with the items swapped too): the occurrence says which is the component.
+    #[test]
+    fn swapped_relationship_reads_as_its_occurrence_says() {
+        let swapped = ASSEMBLY
+            .replace(
+                "#50=(REPRESENTATION_RELATIONSHIP('','',#20,#10)",
+                "#50=(REPRESENTATION_RELATIONSHIP('','',#10,#20)",
+            )
+            .replace(
+                "#51=ITEM_DEFINED_TRANSFORMATION('','',#23,#12)",
+                "#51=ITEM_DEFINED_TRANSFORMATION('','',#12,#23)",
+            );
+        assert_ne!(swapped, ASSEMBLY);
+        let s = step(&swapped);
+        assert_assembly_placements(&s);
+        assert!(
+            s.warnings.iter().any(|w| w.contains("swapped")),
+            "{:?}",
+            s.warnings
+        );
+    }
+
+    /// A second representation holding the component's solid, reached from no product (some
+    /// writers add one): the solid is drawn where the products place it, not also at the
+    /// identity.
+    #[test]
+    fn a_shell_placed_by_the_products_is_not_drawn_again_at_the_identity() {
+        let extra =
+            format!("{ASSEMBLY}\n        #30=ADVANCED_BREP_SHAPE_REPRESENTATION('',(#24),$);");
+        let s = step(&extra);
+        assert_assembly_placements(&s);
+        assert!(
+            s.warnings.iter().any(|w| w.contains("not drawn again")),
+            "{:?}",
+            s.warnings
+        );
+    }
 
     #[test]
     fn item_defined_transformation_places_child_in_parent() {
