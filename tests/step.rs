@@ -277,6 +277,42 @@ fn a_face_that_cannot_be_trimmed_is_skipped_with_its_reason() {
     assert!(whole.skipped.is_empty(), "{:?}", whole.skipped);
 }
 
+/// Tolerant like a kernel: a vertex slightly off its curve, within the file's own
+/// uncertainty (×10), is accepted with a warning; the same vertex in a file that declares no
+/// uncertainty is too far off, and its face is skipped with the reason.
+#[test]
+fn vertices_within_the_files_tolerance_are_accepted() {
+    let disk = |vertex: &str, extra: &str| {
+        format!(
+            "ISO-10303-21;\nHEADER;\nFILE_DESCRIPTION((''),'2;1');\n\
+             FILE_NAME('t','',(''),(''),'','','');\nFILE_SCHEMA(('AUTOMOTIVE_DESIGN'));\n\
+             ENDSEC;\nDATA;\n#1=OPEN_SHELL('',(#20));\n\
+             #2=DIRECTION('',(0.,0.,1.));\n#3=DIRECTION('',(1.,0.,0.));\n\
+             #20=ADVANCED_FACE('',(#21),#25,.T.);\n#21=FACE_OUTER_BOUND('',#22,.T.);\n\
+             #22=EDGE_LOOP('',(#24));\n#24=ORIENTED_EDGE('',*,*,#23,.T.);\n\
+             #23=EDGE_CURVE('',#26,#26,#28,.T.);\n#25=PLANE('',#29);\n\
+             #26=VERTEX_POINT('',#27);\n#27=CARTESIAN_POINT('',({vertex}));\n\
+             #28=CIRCLE('',#29,1.);\n#29=AXIS2_PLACEMENT_3D('',#8,#2,#3);\n\
+             #8=CARTESIAN_POINT('',(0.,0.,1.));\n{extra}ENDSEC;\nEND-ISO-10303-21;\n"
+        )
+    };
+    let uncertainty = "#30=UNCERTAINTY_MEASURE_WITH_UNIT(LENGTH_MEASURE(0.01),#31,\
+                       'distance_accuracy_value','');\n\
+                       #31=(LENGTH_UNIT() NAMED_UNIT(*) SI_UNIT(.MILLI.,.METRE.));\n";
+    let tolerant = parse(&disk("1.05,0.,1.", uncertainty)).expect("loads");
+    assert_eq!(tolerant.patches.len(), 1, "{:?}", tolerant.skipped);
+    let w = tolerant.warnings.join("\n");
+    assert!(w.contains("#23") && w.contains("tolerance"), "{w}");
+    let strict = parse(&disk("1.05,0.,1.", "")).expect_err("nothing drawable");
+    assert!(strict.to_string().contains("#23"), "{strict}");
+    let exact = parse(&disk("1.,0.,1.", "")).expect("loads");
+    assert!(
+        !exact.warnings.iter().any(|w| w.contains("#23")),
+        "{:?}",
+        exact.warnings
+    );
+}
+
 #[test]
 fn unsupported_entities_are_summarised_and_the_rest_renders() {
     let scene = common::load("nist_ctc_01_asme1_rd.stp");

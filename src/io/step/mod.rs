@@ -37,6 +37,14 @@ use crate::model::{
 };
 use crate::tessellate::{PatchMesh, TrimmedTessellator};
 
+/// How far (relative to the coordinates' size) an edge's vertices may lie from its curve.
+const EDGE_VERTEX_TOLERANCE: f64 = 1e-4;
+/// Vertices farther than that are still accepted within this many times the file's
+/// uncertainty ...
+const LOOSE_UNCERTAINTY_FACTOR: f64 = 10.0;
+/// ... or within this fraction of the edge's chord.
+const LOOSE_EDGE_FRACTION: f64 = 0.02;
+
 /// Coarse tolerance of the load-time tessellation, relative to a face's edge extent.
 const PROBE_TOLERANCE: f64 = 0.02;
 
@@ -129,6 +137,7 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
     let mut face_ids: HashMap<u64, Vec<u64>> = HashMap::new();
     let mut edges: HashMap<u64, Arc<TrimEdge>> = HashMap::new();
     let mut converted: Vec<(u64, Result<TrimmedFace, String>)> = Vec::new();
+    let mut loose: Vec<u64> = Vec::new();
     for &shell in &shells {
         let ids = shell_faces(&file, shell);
         for &f in &ids {
@@ -138,8 +147,10 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
                     &table,
                     &vertex_loops,
                     structure.plane_angle_rad,
+                    structure.uncertainty,
                     f,
                     &mut edges,
+                    &mut loose,
                 )
             })
             .and_then(|r| r)
@@ -147,6 +158,18 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
             converted.push((f, r));
         }
         face_ids.insert(shell, ids);
+    }
+
+    if !loose.is_empty() {
+        let list: Vec<String> = loose.iter().take(5).map(|e| format!("#{e}")).collect();
+        warnings.push(format!(
+            "{} edges have vertices off their curve by more than {EDGE_VERTEX_TOLERANCE:e} of \
+             their size, accepted within the file's tolerance (its uncertainty ×{LOOSE_UNCERTAINTY_FACTOR} \
+             or {LOOSE_EDGE_FRACTION} of the edge) ({}{})",
+            loose.len(),
+            list.join(", "),
+            if loose.len() > 5 { ", …" } else { "" }
+        ));
     }
 
     // Probe tessellation: bounds, and faces that cannot be trimmed.
@@ -308,8 +331,10 @@ fn convert_face(
     table: &Table,
     vertex_loops: &std::collections::HashSet<u64>,
     angle_rad: Option<f64>,
+    uncertainty: Option<f64>,
     id: u64,
     edges: &mut HashMap<u64, Arc<TrimEdge>>,
+    loose: &mut Vec<u64>,
 ) -> Result<TrimmedFace, String> {
     let face: FaceSurfaceHolder = if let Some(f) = table.face_surface.get(&id) {
         f.clone()
@@ -375,7 +400,7 @@ fn convert_face(
                         .edge_curve
                         .get(&ecid)
                         .ok_or_else(|| format!("edge #{ecid} is not a readable EDGE_CURVE"))?;
-                    let e = convert_edge(file, table, ecid, holder)?;
+                    let e = convert_edge(file, table, ecid, holder, uncertainty, loose)?;
                     let e = Arc::new(e);
                     edges.insert(ecid, e.clone());
                     e
@@ -490,6 +515,8 @@ fn convert_edge(
     table: &Table,
     id: u64,
     holder: &EdgeCurveHolder,
+    uncertainty: Option<f64>,
+    loose: &mut Vec<u64>,
 ) -> Result<TrimEdge, String> {
     let ec = holder
         .clone()
@@ -498,7 +525,11 @@ fn convert_edge(
     let start = to_dvec(Point3::from(&ec.edge_start.vertex_geometry));
     let end = to_dvec(Point3::from(&ec.edge_end.vertex_geometry));
     let size = start.length().max(end.length()).max(start.distance(end));
-    let tol = 1e-4 * (1.0 + size);
+    let tol = EDGE_VERTEX_TOLERANCE * (1.0 + size);
+    // What a kernel accepts (OCCT raises a vertex's tolerance until it covers its edges): the
+    // file's own uncertainty, generously, or a small fraction of the edge.
+    let loose_tol = (LOOSE_UNCERTAINTY_FACTOR * uncertainty.unwrap_or(0.0))
+        .max(LOOSE_EDGE_FRACTION * start.distance(end).max(tol));
     // truck-stepio follows a SURFACE_CURVE's preferred representation, which may be a
     // parameter-space curve (its parameters need not match truck's surface, and it only
     // approximates the edge); the 3D curve of a SURFACE_CURVE / SEAM_CURVE is exact: use it.
@@ -518,16 +549,32 @@ fn convert_edge(
         .parse_curve3d()
         .ok()
     });
-    if let Some(curve) = exact
-        && let Some(e) = TrimEdge::new(id, curve, start, end, tol)
-    {
-        return Ok(e);
-    }
-    let curve = ec
+    let truck_curve = ec
         .parse_curve3d()
-        .map_err(|e| format!("edge #{id}: curve not supported: {e}"))?;
-    TrimEdge::new(id, curve, start, end, tol)
-        .ok_or_else(|| format!("edge #{id}: its vertices are not on its curve"))
+        .map_err(|e| format!("edge #{id}: curve not supported: {e}"));
+    for t in [tol, loose_tol] {
+        if let Some(curve) = exact.clone()
+            && let Some(e) = TrimEdge::new(id, curve, start, end, t)
+        {
+            if t > tol {
+                loose.push(id);
+            }
+            return Ok(e);
+        }
+        if let Ok(curve) = truck_curve.clone()
+            && let Some(e) = TrimEdge::new(id, curve, start, end, t)
+        {
+            if t > tol {
+                loose.push(id);
+            }
+            return Ok(e);
+        }
+    }
+    truck_curve?;
+    Err(format!(
+        "edge #{id}: its vertices are not on its curve (farther than the file's tolerance, \
+         {loose_tol:e})"
+    ))
 }
 
 fn holder_ref<T>(p: &PlaceHolder<T>) -> Option<u64> {
