@@ -530,3 +530,31 @@ fn vertex_loops_lie_on_their_surface() {
         "the CTC-01 cones' apexes were not found ({checked})"
     );
 }
+
+/// Large STEP files travel gzip-compressed (STEP shrinks about 8×): `.stp.gz` loads as the
+/// file itself; a corrupt one is a clear error.
+#[test]
+fn gzip_compressed_step_loads_like_the_file() {
+    use std::io::Write;
+    let dir = common::scratch("step-gzip");
+    let plain = common::root().join("models/screw.step");
+    let bytes = std::fs::read(&plain).expect("readable");
+    let gz = dir.join("screw.step.gz");
+    let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+    enc.write_all(&bytes).expect("compress");
+    std::fs::write(&gz, enc.finish().expect("compress")).expect("write");
+    let a = load(&plain).expect("plain loads");
+    let b = load(&gz).expect("gzip loads");
+    assert_eq!(a.patches.len(), b.patches.len());
+    assert_eq!(a.bbox, b.bbox);
+    let bad = dir.join("bad.stp.gz");
+    std::fs::write(&bad, &bytes[..100]).expect("write");
+    let e = load(&bad).expect_err("not gzip");
+    assert!(e.to_string().contains("gzip"), "{e}");
+    let other = dir.join("x.bpt.gz");
+    std::fs::write(&other, b"").expect("write");
+    assert!(matches!(
+        load(&other),
+        Err(LoadError::UnsupportedFormat { .. })
+    ));
+}

@@ -6,6 +6,7 @@
 //! |-----------|---------------|---------|
 //! | `.bpt`    | [`bpt::read`] | z       |
 //! | `.step`, `.stp` | [`step::parse`] | z (CAD convention) |
+//! | `.step.gz`, `.stp.gz` | gzip, then [`step::parse`] | z |
 //!
 //! Every reader reports failures as a [`LoadError`] that names the file and, where the problem
 //! is at a place in the file, the 1-based line, so that its message reads like
@@ -83,7 +84,7 @@ pub enum LoadError {
 
     /// No reader for this file extension (`extension` is empty when there is none).
     #[error(
-        "{}: unsupported model format {extension:?} (patchwork reads .bpt, .step, .stp, .glb, .gltf and .obj files)",
+        "{}: unsupported model format {extension:?} (patchwork reads .bpt, .step, .stp, .step.gz, .stp.gz, .glb, .gltf, .obj and .ply files)",
         .path.display()
     )]
     UnsupportedFormat { path: PathBuf, extension: String },
@@ -130,6 +131,33 @@ pub(crate) fn progress(n: usize, what: &str) -> indicatif::ProgressBar {
     pb
 }
 
+/// Most bytes a compressed model may expand to.
+pub const MAX_GUNZIPPED_BYTES: u64 = 4 << 30;
+
+/// The decompressed bytes of a gzip file, at most [`MAX_GUNZIPPED_BYTES`].
+fn read_gzip(path: &Path) -> Result<Vec<u8>, LoadError> {
+    use std::io::Read;
+    let file = std::fs::File::open(path).map_err(|source| LoadError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let mut bytes = Vec::new();
+    flate2::read::MultiGzDecoder::new(std::io::BufReader::new(file))
+        .take(MAX_GUNZIPPED_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| LoadError::Unreadable {
+            path: path.to_path_buf(),
+            reason: format!("not a readable gzip file: {e}"),
+        })?;
+    if bytes.len() as u64 > MAX_GUNZIPPED_BYTES {
+        return Err(LoadError::Unreadable {
+            path: path.to_path_buf(),
+            reason: format!("expands to more than {MAX_GUNZIPPED_BYTES} bytes"),
+        });
+    }
+    Ok(bytes)
+}
+
 /// Triangles per patch when a mesh is split into patches (the 1–2 k).
 pub const DEFAULT_PATCH_TRIANGLES: usize = 1500;
 
@@ -142,6 +170,19 @@ pub fn load(path: &Path) -> Result<Scene, LoadError> {
         .extension()
         .map(|e| e.to_string_lossy().into_owned())
         .unwrap_or_default();
+    if extension.eq_ignore_ascii_case("gz") {
+        let inner = Path::new(path.file_stem().unwrap_or_default())
+            .extension()
+            .map(|e| e.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        if inner.eq_ignore_ascii_case("step") || inner.eq_ignore_ascii_case("stp") {
+            return step::parse(&read_gzip(path)?, path);
+        }
+        return Err(LoadError::UnsupportedFormat {
+            path: path.to_path_buf(),
+            extension: format!("{inner}.gz"),
+        });
+    }
     if extension.eq_ignore_ascii_case("bpt") {
         let patches = bpt::read(path)?;
         Ok(Scene::from_bezier(patches, UpAxis::Z))
