@@ -742,82 +742,77 @@ fn cmd_export(args: &ExportArgs) -> Result<(), CliError> {
         view::DEFAULT_FOV_Y_DEG.to_radians(),
         (1024, 768),
     );
-    // Placements: patches of one part sharing a transform form one instance.
-    let mut instances: Vec<(u32, glam::DMat4)> = Vec::new();
-    for p in &scene.patches {
-        if !instances
-            .iter()
-            .any(|(part, m)| *part == p.part && *m == p.transform)
-        {
-            instances.push((p.part, p.transform));
-        }
-    }
+    // One node per placed solid / shell (the scene's instances); one mesh per shell (or part,
+    // outside STEP), shared by the placements of that shell.
+    let mesh_key = |i: &patchwork::model::Instance| (i.part, i.shell);
     let mut meshes = Vec::new();
-    let mut part_mesh = std::collections::HashMap::new();
+    let mut mesh_of = std::collections::HashMap::new();
+    let mut nodes = Vec::new();
     let mut t = Tessellators::new();
-    for (part, first) in &instances {
-        if part_mesh.contains_key(part) {
-            continue;
-        }
-        // The finest ε any placement of a face asks for, in the part's own units.
-        let mut mesh = ExportMesh {
-            name: scene
-                .parts
-                .get(*part as usize)
-                .map(|p| p.name.clone())
-                .unwrap_or_default(),
-            ..ExportMesh::default()
-        };
-        for p in scene
+    for (index, inst) in scene.instances.iter().enumerate() {
+        let patches: Vec<&patchwork::model::Patch> = scene
             .patches
             .iter()
-            .filter(|p| p.part == *part && p.transform == *first)
-        {
-            let eps = match args.tolerance {
-                Some(tol) => tol / p.scale(),
-                None => scene
-                    .patches
-                    .iter()
-                    .filter(|q| q.part == *part && same_surface(q, p))
-                    .map(|q| view.eps_obj(&q.bounds, args.pixel_error) / q.scale())
-                    .fold(f64::INFINITY, f64::min),
-            };
-            let local = patchwork::model::Patch {
-                transform: glam::DMat4::IDENTITY,
-                ..p.clone()
-            };
-            let mut m = PatchMesh::default();
-            t.patch(&local, eps, &mut m);
-            let base = mesh.positions.len() as u32;
-            mesh.positions
-                .extend(m.positions.iter().map(|v| v.to_array()));
-            mesh.normals.extend(m.normals.iter().map(|v| v.to_array()));
-            mesh.indices
-                .extend(m.triangles.iter().flatten().map(|i| base + i));
-            if mesh.color.is_none() {
-                mesh.color = p.color.map(|c| [c[0], c[1], c[2], 1.0]);
-            }
+            .filter(|p| p.instance as usize == index)
+            .collect();
+        if patches.is_empty() {
+            continue;
         }
-        part_mesh.insert(*part, meshes.len());
-        meshes.push(mesh);
+        let part_name = scene
+            .parts
+            .get(inst.part as usize)
+            .map(|p| p.name.clone())
+            .unwrap_or_default();
+        let mesh = match mesh_of.get(&mesh_key(inst)) {
+            Some(&m) => m,
+            None => {
+                let mut mesh = ExportMesh {
+                    name: part_name.clone(),
+                    ..ExportMesh::default()
+                };
+                for p in &patches {
+                    // The finest ε any placement of the face asks for, in its own units.
+                    let eps = match args.tolerance {
+                        Some(tol) => tol / p.scale(),
+                        None => scene
+                            .patches
+                            .iter()
+                            .filter(|q| q.part == p.part && same_surface(q, p))
+                            .map(|q| view.eps_obj(&q.bounds, args.pixel_error) / q.scale())
+                            .fold(f64::INFINITY, f64::min),
+                    };
+                    let local = patchwork::model::Patch {
+                        transform: glam::DMat4::IDENTITY,
+                        ..(*p).clone()
+                    };
+                    let mut m = PatchMesh::default();
+                    t.patch(&local, eps, &mut m);
+                    let base = mesh.positions.len() as u32;
+                    mesh.positions
+                        .extend(m.positions.iter().map(|v| v.to_array()));
+                    mesh.normals.extend(m.normals.iter().map(|v| v.to_array()));
+                    mesh.indices
+                        .extend(m.triangles.iter().flatten().map(|i| base + i));
+                    if mesh.color.is_none() {
+                        mesh.color = p.color.map(|c| [c[0], c[1], c[2], 1.0]);
+                    }
+                }
+                mesh_of.insert(mesh_key(inst), meshes.len());
+                meshes.push(mesh);
+                meshes.len() - 1
+            }
+        };
+        let name = match (inst.name.is_empty(), inst.shell) {
+            (false, _) => format!("{part_name} {}", inst.name),
+            (true, Some(shell)) => format!("{part_name} shell #{shell} {index}"),
+            (true, None) => format!("{part_name} {index}"),
+        };
+        nodes.push(ExportNode {
+            name,
+            mesh,
+            matrix: inst.transform.as_mat4().to_cols_array(),
+        });
     }
-    let nodes = instances
-        .iter()
-        .enumerate()
-        .map(|(i, (part, m))| ExportNode {
-            name: format!(
-                "{} {}",
-                scene
-                    .parts
-                    .get(*part as usize)
-                    .map(|p| p.name.as_str())
-                    .unwrap_or(""),
-                i
-            ),
-            mesh: part_mesh[part],
-            matrix: m.as_mat4().to_cols_array(),
-        })
-        .collect();
     let doc = ExportScene {
         meshes,
         nodes,

@@ -96,6 +96,8 @@ pub struct Patch {
     pub part: u32,
     /// Colour from the file (linear RGB 0–1), when it has one.
     pub color: Option<[f32; 3]>,
+    /// Index into [`Scene::instances`]: the placed solid or shell the patch belongs to.
+    pub instance: u32,
 }
 
 impl Patch {
@@ -128,6 +130,20 @@ pub struct Part {
     pub name: String,
 }
 
+/// One placement of a part's solid or shell: the unit an assembly tree lists and CAD kernels
+/// count (OCCT's placed solids).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Instance {
+    /// Occurrence names along the assembly path, joined by `/` (empty when unnamed).
+    pub name: String,
+    /// Index into [`Scene::parts`].
+    pub part: u32,
+    /// Object → world, in scene units (millimetres for STEP).
+    pub transform: DMat4,
+    /// The STEP shell entity, when read from STEP.
+    pub shell: Option<u64>,
+}
+
 /// Which world axis points up in a model's own convention.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum UpAxis {
@@ -154,6 +170,9 @@ pub struct Scene {
     /// Axis-aligned box of the model (world), `(min, max)`.
     pub bbox: (DVec3, DVec3),
     pub parts: Vec<Part>,
+    /// Placed solids / shells (one per placement of a part's shell), what CAD kernels count
+    /// as the assembly's instances; one for a Bézier or mesh scene.
+    pub instances: Vec<Instance>,
     /// Faces left out, with the reason.
     pub skipped: Vec<SkippedFace>,
     /// What the reader wants the user to know (unsupported entities, repairs).
@@ -179,6 +198,7 @@ impl Scene {
                 transform: DMat4::IDENTITY,
                 part: 0,
                 color: None,
+                instance: 0,
             })
             .collect();
         Scene::single_part(patches, up, bbox, Vec::new())
@@ -199,6 +219,12 @@ impl Scene {
             bbox,
             parts: vec![Part {
                 name: String::new(),
+            }],
+            instances: vec![Instance {
+                name: String::new(),
+                part: 0,
+                transform: DMat4::IDENTITY,
+                shell: None,
             }],
             skipped: Vec::new(),
             warnings,
@@ -242,6 +268,7 @@ impl Scene {
                 transform: DMat4::IDENTITY,
                 part: 0,
                 color: None,
+                instance: 0,
             })
             .collect();
         Scene::single_part(patches, up, bbox, warnings)

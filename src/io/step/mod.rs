@@ -32,8 +32,8 @@ use super::LoadError;
 use crate::isolate::isolated;
 use crate::model::trimmed::{LoopEdge, TrimEdge, TruckSurface, to_dvec};
 use crate::model::{
-    Part, Patch, PatchSurface, Scene, SkippedFace, Sphere, TrimmedFace, UpAxis, bounding_box,
-    transform_scale,
+    Instance, Part, Patch, PatchSurface, Scene, SkippedFace, Sphere, TrimmedFace, UpAxis,
+    bounding_box, transform_scale,
 };
 use crate::tessellate::{PatchMesh, TrimmedTessellator};
 
@@ -216,9 +216,17 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
     }
     let mut patches = Vec::new();
     let mut corners = Vec::new();
+    let mut instances = Vec::new();
     for inst in &structure.instances {
         let transform = DMat4::from_scale(DVec3::splat(unit)) * inst.transform;
         let scale = transform_scale(&transform);
+        let instance = instances.len() as u32;
+        instances.push(Instance {
+            name: inst.instance_name.clone(),
+            part: inst.part as u32,
+            transform,
+            shell: Some(inst.shell),
+        });
         for fid in face_ids.get(&inst.shell).into_iter().flatten() {
             let Some((face, (lo, hi))) = faces.get(fid) else {
                 continue;
@@ -248,6 +256,7 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
                 bounds,
                 part: inst.part as u32,
                 color,
+                instance,
             });
         }
     }
@@ -277,6 +286,7 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
         patches,
         up: UpAxis::Z,
         parts,
+        instances,
         skipped,
         warnings,
     })
