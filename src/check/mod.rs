@@ -2,6 +2,7 @@
 //! ([`crack`]) and golden-image comparison with NVIDIA's FLIP ([`golden`]).
 
 pub mod crack;
+pub mod fidelity;
 pub mod golden;
 
 pub use crack::{CheckOptions, CheckReport, CrackCounts, run_check};

@@ -138,23 +138,19 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
     let mut edges: HashMap<u64, Arc<TrimEdge>> = HashMap::new();
     let mut converted: Vec<(u64, Result<TrimmedFace, String>)> = Vec::new();
     let mut loose: Vec<u64> = Vec::new();
+    let source = FaceSource {
+        file: &file,
+        table: &table,
+        vertex_loops: &vertex_loops,
+        angle_rad: structure.plane_angle_rad,
+        uncertainty: structure.uncertainty,
+    };
     for &shell in &shells {
         let ids = shell_faces(&file, shell);
         for &f in &ids {
-            let r = isolated(|| {
-                convert_face(
-                    &file,
-                    &table,
-                    &vertex_loops,
-                    structure.plane_angle_rad,
-                    structure.uncertainty,
-                    f,
-                    &mut edges,
-                    &mut loose,
-                )
-            })
-            .and_then(|r| r)
-            .map_err(|e| e.to_string());
+            let r = isolated(|| convert_face(&source, f, &mut edges, &mut loose))
+                .and_then(|r| r)
+                .map_err(|e| e.to_string());
             converted.push((f, r));
         }
         face_ids.insert(shell, ids);
@@ -336,16 +332,31 @@ fn entity_ref<T: Clone>(p: &PlaceHolder<T>, table: &HashMap<u64, T>) -> Option<(
 }
 
 /// One face with its surface and loops of edges (edges shared through `edges`).
-fn convert_face(
-    file: &p21::P21File,
-    table: &Table,
-    vertex_loops: &std::collections::HashSet<u64>,
+/// What converting faces reads: the file twice (our scanner, truck's table) and what the
+/// structure found (units, tolerance).
+struct FaceSource<'a> {
+    file: &'a p21::P21File,
+    table: &'a Table,
+    vertex_loops: &'a std::collections::HashSet<u64>,
+    /// Radians per file plane-angle unit.
     angle_rad: Option<f64>,
+    /// The file's distance uncertainty (file units).
     uncertainty: Option<f64>,
+}
+
+fn convert_face(
+    src: &FaceSource<'_>,
     id: u64,
     edges: &mut HashMap<u64, Arc<TrimEdge>>,
     loose: &mut Vec<u64>,
 ) -> Result<TrimmedFace, String> {
+    let FaceSource {
+        file,
+        table,
+        vertex_loops,
+        angle_rad,
+        uncertainty,
+    } = *src;
     let face: FaceSurfaceHolder = if let Some(f) = table.face_surface.get(&id) {
         f.clone()
     } else if let Some(of) = table.oriented_face.get(&id) {

@@ -1,0 +1,417 @@
+//! How far a trimmed face's tessellation lies from the **trimmed** face, measured
+//! independently of the tessellator's own refinement.
+//!
+//! The tessellator ([`crate::tessellate::TrimmedTessellator`]) measures its error at 7 points
+//! per triangle against the *untrimmed* surface at the parameters it refined; a triangle over
+//! a wrong trim region, or between those points, goes unseen. Here every triangle is sampled
+//! on a barycentric grid of [`SAMPLES_PER_SIDE`] steps (28 points, 4× the refinement's), and
+//! each sample `p` is judged against the face itself:
+//!
+//! 1. `p` is projected onto the surface from scratch (no parameter from the tessellator), at
+//!    `uv`, with `d = |S(uv) − p|`;
+//! 2. the trim loops are rebuilt from the exact edge curves, sampled until their chords are
+//!    within ε/16, projected into parameter space and unwrapped across periodic seams;
+//! 3. `uv` is inside the face when it lies on the face's side of the nearest boundary segment
+//!    (the STEP convention: the face lies to the left of its loops when its sense agrees with
+//!    the surface's, [`TrimmedFace::domain_left`]) — a local test that needs no closing of
+//!    loops that run around a periodic surface;
+//! 4. the sample's error is `d` inside, and its 3D distance to the boundary curves outside
+//!    (the nearest point of the trimmed face then lies on its boundary).
+//!
+//! The worst sample over the face is returned with its position, so `stats` can name faces.
+//! What it does not do: samples are points, not a proof (a spike between samples 1/6 of a
+//! triangle side apart is missed); a surface read wrongly (both the tessellator and this
+//! measure evaluate the same surface) is the business of the checks against the file's own
+//! edges and of the Open CASCADE cross-check in `tools/occt_fidelity.py`.
+
+use glam::{DMat4, DVec2, DVec3};
+
+use crate::model::trimmed::{SurfaceEval, TrimmedFace, TruckSurface};
+use crate::tessellate::PatchMesh;
+
+/// Barycentric steps per triangle side: (n+1)(n+2)/2 samples per triangle.
+pub const SAMPLES_PER_SIDE: usize = 6;
+/// Trim loops are rebuilt to this fraction of ε.
+pub const LOOP_FRACTION: f64 = 1.0 / 16.0;
+/// Most samples per face (larger meshes are sampled with fewer steps per side).
+pub const MAX_SAMPLES: usize = 400_000;
+
+/// The measured distance of one face's tessellation to the trimmed face.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FaceFidelity {
+    /// STEP entity id of the face.
+    pub face: u64,
+    /// Surface type (`plane`, `cylinder`, `cone`, `sphere`, `torus`, `swept`, `b-spline`,
+    /// `nurbs`).
+    pub surface: &'static str,
+    /// Tolerance the mesh was built for (face units).
+    pub eps: f64,
+    /// Largest error over all samples (face units).
+    pub error: f64,
+    /// Largest distance to the untrimmed surface over the samples inside the trim.
+    pub surface_error: f64,
+    /// Samples outside the trim by more than ε.
+    pub outside: usize,
+    /// Samples taken.
+    pub samples: usize,
+    /// Where the worst sample is (face units).
+    pub worst_at: DVec3,
+}
+
+impl FaceFidelity {
+    /// `error / eps`.
+    pub fn ratio(&self) -> f64 {
+        self.error / self.eps.max(f64::MIN_POSITIVE)
+    }
+}
+
+/// Surface type name of a face.
+pub fn surface_kind(s: &TruckSurface) -> &'static str {
+    use truck_stepio::r#in::alias::ElementarySurface as E;
+    match s {
+        TruckSurface::ElementarySurface(e) => match e.as_ref() {
+            E::Plane(_) => "plane",
+            E::Sphere(_) => "sphere",
+            E::CylindricalSurface(_) => "cylinder",
+            E::ToroidalSurface(_) => "torus",
+            E::ConicalSurface(_) => "cone",
+        },
+        TruckSurface::SweptCurve(_) => "swept",
+        TruckSurface::BSplineSurface(_) => "b-spline",
+        TruckSurface::NurbsSurface(_) => "nurbs",
+    }
+}
+
+/// Tessellates every trimmed patch of `scene` for `view` at `pixel_error` as the renderer
+/// does, and measures each against its face (on rayon). Sorted worst first.
+pub fn measure_scene(
+    scene: &crate::model::Scene,
+    view: &crate::view::View,
+    pixel_error: f64,
+) -> Vec<(u32, FaceFidelity)> {
+    use rayon::prelude::*;
+    let mut out: Vec<(u32, FaceFidelity)> = scene
+        .patches
+        .par_iter()
+        .map_init(crate::tessellate::Tessellators::new, |t, p| {
+            let crate::model::PatchSurface::Trimmed(face) = &p.surface else {
+                return None;
+            };
+            let eps = view.eps_obj(&p.bounds, pixel_error);
+            let mut mesh = PatchMesh::default();
+            t.patch(p, eps, &mut mesh);
+            measure_placed(face, &p.transform, &mesh, eps).map(|f| (p.id, f))
+        })
+        .flatten()
+        .collect();
+    out.sort_by(|a, b| b.1.ratio().total_cmp(&a.1.ratio()));
+    out
+}
+
+/// Measures `mesh` (in world coordinates, placed by `transform`) against `face` for the
+/// world tolerance `eps`. Returns `None` for an empty mesh.
+pub fn measure_placed(
+    face: &TrimmedFace,
+    transform: &DMat4,
+    mesh: &PatchMesh,
+    eps: f64,
+) -> Option<FaceFidelity> {
+    let det = transform.determinant();
+    if !det.is_finite() || det.abs() < 1e-300 {
+        return None;
+    }
+    let inverse = transform.inverse();
+    let scale = crate::model::transform_scale(transform).max(1e-300);
+    let local: Vec<DVec3> = mesh
+        .positions
+        .iter()
+        .map(|p| inverse.transform_point3(p.as_dvec3()))
+        .collect();
+    measure(face, &local, &mesh.triangles, eps / scale)
+}
+
+/// Measures triangles `triangles` over `positions` (face units) against `face` for
+/// tolerance `eps` (face units).
+pub fn measure(
+    face: &TrimmedFace,
+    positions: &[DVec3],
+    triangles: &[[u32; 3]],
+    eps: f64,
+) -> Option<FaceFidelity> {
+    if triangles.is_empty() || !(eps.is_finite() && eps > 0.0) {
+        return None;
+    }
+    let boundary = Boundary::build(face, eps * LOOP_FRACTION);
+    let mut n = SAMPLES_PER_SIDE;
+    while n > 1 && triangles.len() * (n + 1) * (n + 2) / 2 > MAX_SAMPLES {
+        n -= 1;
+    }
+    let mut out = FaceFidelity {
+        face: face.id,
+        surface: surface_kind(&face.surface),
+        eps,
+        error: 0.0,
+        surface_error: 0.0,
+        outside: 0,
+        samples: 0,
+        worst_at: DVec3::ZERO,
+    };
+    let mut vertex_uv: Vec<Option<DVec2>> = vec![None; positions.len()];
+    for t in triangles {
+        let Some(corners) = t
+            .map(|i| positions.get(i as usize).copied())
+            .into_iter()
+            .collect::<Option<Vec<_>>>()
+        else {
+            continue;
+        };
+        // A hint per triangle: the projection of its first corner (cached per vertex).
+        let hint = match vertex_uv.get(t[0] as usize).copied().flatten() {
+            Some(uv) => uv,
+            None => {
+                let uv = face.project(corners[0], None).unwrap_or_default();
+                if let Some(c) = vertex_uv.get_mut(t[0] as usize) {
+                    *c = Some(uv);
+                }
+                uv
+            }
+        };
+        let mut prev = hint;
+        for i in 0..=n {
+            for j in 0..=(n - i) {
+                let (a, b) = (i as f64 / n as f64, j as f64 / n as f64);
+                let p = corners[0] * (1.0 - a - b) + corners[1] * a + corners[2] * b;
+                // From the previous sample, and from scratch when that lands far off (a
+                // search can end at a cone's apex or across a seam).
+                let near = face.project(p, Some(prev));
+                let off = |uv: &DVec2| face.point(*uv).distance(p);
+                let uv = match near {
+                    Some(uv) if off(&uv) <= 0.25 * eps => Some(uv),
+                    _ => [near, face.project(p, None), face.project(p, Some(hint))]
+                        .into_iter()
+                        .flatten()
+                        .min_by(|a, b| off(a).total_cmp(&off(b))),
+                };
+                out.samples += 1;
+                let Some(uv) = uv else {
+                    // No foot point: judged by the boundary alone.
+                    let d = boundary.distance_3d(p);
+                    record(&mut out, d, p);
+                    continue;
+                };
+                prev = uv;
+                let d = face.point(uv).distance(p);
+                let err = if boundary.inside(face, uv) {
+                    out.surface_error = out.surface_error.max(d);
+                    d
+                } else {
+                    let db = boundary.distance_3d(p).min(f64::MAX);
+                    if db > eps {
+                        out.outside += 1;
+                    }
+                    db
+                };
+                record(&mut out, err, p);
+            }
+        }
+    }
+    Some(out)
+}
+
+fn record(out: &mut FaceFidelity, err: f64, p: DVec3) {
+    if err > out.error || !err.is_finite() {
+        out.error = if err.is_finite() { err } else { f64::INFINITY };
+        out.worst_at = p;
+    }
+}
+
+/// The face's trim loops, rebuilt from the edge curves: 3D polylines and their unwrapped
+/// parameter-space images.
+#[derive(Debug, Default)]
+struct Boundary {
+    /// Per loop: (3D point, parameter, whether the segment from here to the next point runs
+    /// along a seam), closed (the first point repeated, unwrapped).
+    loops: Vec<Vec<(DVec3, DVec2, bool)>>,
+    periods: (Option<f64>, Option<f64>),
+    /// Scales of u and v that make parameter distances roughly 3D distances.
+    metric: DVec2,
+}
+
+impl Boundary {
+    fn build(face: &TrimmedFace, tol: f64) -> Boundary {
+        let periods = face.periods();
+        let mut loops = Vec::new();
+        let mut speeds = DVec2::ZERO;
+        let mut count = 0.0;
+        // A seam (an edge the face uses twice, once each way) is no boundary: the face lies
+        // on both of its sides.
+        let mut uses: std::collections::HashMap<u64, usize> = std::collections::HashMap::new();
+        for le in face.loops.iter().flatten() {
+            *uses.entry(le.edge.id).or_default() += 1;
+        }
+        for lp in &face.loops {
+            let mut pts: Vec<(DVec3, bool)> = Vec::new();
+            for le in lp {
+                let e = &le.edge;
+                let (a, b) = if le.forward {
+                    (e.t0, e.t1)
+                } else {
+                    (e.t1, e.t0)
+                };
+                let mut ts = vec![a, b];
+                // Split until every chord is within `tol` of the curve at its midpoint.
+                let mut k = 0;
+                while k + 1 < ts.len() && ts.len() < 1 << 14 {
+                    let (t0, t1) = (ts[k], ts[k + 1]);
+                    let (p0, p1) = (e.point(t0), e.point(t1));
+                    let tm = 0.5 * (t0 + t1);
+                    let pm = e.point(tm);
+                    let chord = (p0 + p1) * 0.5;
+                    // Always split the first few times (a closed edge starts and ends at one
+                    // point).
+                    if pm.distance(chord) > tol || ts.len() < 9 {
+                        ts.insert(k + 1, tm);
+                    } else {
+                        k += 1;
+                    }
+                }
+                // The edge's own start vertex, then curve points; its end is the next edge's
+                // start.
+                let first = if le.forward { e.start } else { e.end };
+                let seam = uses.get(&e.id).is_some_and(|&n| n > 1);
+                let n = ts.len();
+                for (i, &t) in ts.iter().enumerate().take(n - 1) {
+                    pts.push((if i == 0 { first } else { e.point(t) }, seam));
+                }
+            }
+            if pts.len() < 2 {
+                continue;
+            }
+            let mut out: Vec<(DVec3, DVec2, bool)> = Vec::with_capacity(pts.len() + 1);
+            let mut prev: Option<DVec2> = None;
+            for &(p, seam) in &pts {
+                let Some(mut uv) = face.project(p, prev).or_else(|| face.project(p, None)) else {
+                    continue;
+                };
+                if let Some(q) = prev {
+                    uv = unwrap_near(uv, q, periods);
+                    if uv.distance_squared(q) == 0.0 {
+                        continue;
+                    }
+                }
+                let (su, sv) = face.derivs(uv);
+                if su.is_finite() && sv.is_finite() {
+                    speeds += DVec2::new(su.length(), sv.length());
+                    count += 1.0;
+                }
+                out.push((p, uv, seam));
+                prev = Some(uv);
+            }
+            if let (Some(&first), Some(&(_, last, _))) = (out.first(), out.last()) {
+                out.push((first.0, unwrap_near(first.1, last, periods), false));
+                loops.push(out);
+            }
+        }
+        let metric = if count > 0.0 {
+            (speeds / count).max(DVec2::splat(1e-12))
+        } else {
+            DVec2::ONE
+        };
+        Boundary {
+            loops,
+            periods,
+            metric,
+        }
+    }
+
+    /// Smallest 3D distance from `p` to the boundary polylines.
+    fn distance_3d(&self, p: DVec3) -> f64 {
+        let mut best = f64::INFINITY;
+        for lp in &self.loops {
+            for w in lp.windows(2).filter(|w| !w[0].2) {
+                best = best.min(dist_to_segment(p, w[0].0, w[1].0));
+            }
+        }
+        best
+    }
+
+    /// Whether `uv` lies on the face's side of the nearest boundary segment.
+    fn inside(&self, face: &TrimmedFace, uv: DVec2) -> bool {
+        let scale = self.metric;
+        // Nearest segment: (distance², loop, segment, parameter along it, uv shifted).
+        let mut best: Option<(f64, usize, usize, f64, DVec2)> = None;
+        for (li, lp) in self.loops.iter().enumerate() {
+            for (si, w) in lp.windows(2).enumerate() {
+                if w[0].2 {
+                    continue;
+                }
+                let (a, b) = (w[0].1, w[1].1);
+                let q = unwrap_near(uv, 0.5 * (a + b), self.periods);
+                let (a2, b2, q2) = (a * scale, b * scale, q * scale);
+                let ab = b2 - a2;
+                let t = ((q2 - a2).dot(ab) / ab.length_squared().max(1e-300)).clamp(0.0, 1.0);
+                let d2 = (a2 + ab * t).distance_squared(q2);
+                if best.is_none_or(|b| d2 < b.0) {
+                    best = Some((d2, li, si, t, q));
+                }
+            }
+        }
+        let Some((_, li, si, t, q)) = best else {
+            return true;
+        };
+        let lp = &self.loops[li];
+        let seg = |k: usize| {
+            let k = k % (lp.len() - 1);
+            (lp[k].1 * scale, lp[k + 1].1 * scale, lp[k].2)
+        };
+        let cross = |d: DVec2, r: DVec2| d.x * r.y - d.y * r.x;
+        let (a, b, _) = seg(si);
+        let q = q * scale;
+        let left = if t > 0.0 && t < 1.0 {
+            cross(b - a, q - a) > 0.0
+        } else {
+            // At a vertex: the two segments meeting there decide.
+            let (k_in, k_out) = if t <= 0.0 {
+                (si + lp.len() - 2, si)
+            } else {
+                (si, si + 1)
+            };
+            // Directions do not depend on which period a segment was unwrapped to; `q` was
+            // shifted next to segment `si`, whose end point `v` is.
+            let v = if t <= 0.0 { a } else { b };
+            let (a_in, b_in, seam_in) = seg(k_in);
+            let (a_out, b_out, seam_out) = seg(k_out);
+            let (d_in, d_out) = (b_in - a_in, b_out - a_out);
+            let l1 = cross(d_in, q - v) > 0.0;
+            let l2 = cross(d_out, q - v) > 0.0;
+            if seam_in {
+                // The boundary goes on across the seam, one period away: straight on.
+                l2
+            } else if seam_out {
+                l1
+            } else if cross(d_in, d_out) >= 0.0 {
+                l1 && l2
+            } else {
+                l1 || l2
+            }
+        };
+        left == face.domain_left
+    }
+}
+
+/// `uv` shifted by whole periods to lie nearest `near`.
+fn unwrap_near(mut uv: DVec2, near: DVec2, periods: (Option<f64>, Option<f64>)) -> DVec2 {
+    if let Some(p) = periods.0.filter(|p| *p > 0.0) {
+        uv.x += ((near.x - uv.x) / p).round() * p;
+    }
+    if let Some(p) = periods.1.filter(|p| *p > 0.0) {
+        uv.y += ((near.y - uv.y) / p).round() * p;
+    }
+    uv
+}
+
+fn dist_to_segment(p: DVec3, a: DVec3, b: DVec3) -> f64 {
+    let ab = b - a;
+    let t = ((p - a).dot(ab) / ab.length_squared().max(1e-300)).clamp(0.0, 1.0);
+    (a + ab * t).distance(p)
+}
