@@ -313,6 +313,32 @@ fn vertices_within_the_files_tolerance_are_accepted() {
     );
 }
 
+/// A placement along x without a reference direction (CATIA writes them): ISO 10303-42 takes
+/// y as the reference there; truck-stepio alone takes x and gets NaN, which lost every
+/// circle, cylinder or cone so placed (94 of 533 faces of a CATIA block).
+#[test]
+fn a_placement_along_x_without_reference_direction_is_complete() {
+    let text = "ISO-10303-21;\nHEADER;\nFILE_DESCRIPTION((''),'2;1');\n\
+        FILE_NAME('t','',(''),(''),'','','');\nFILE_SCHEMA(('AUTOMOTIVE_DESIGN'));\n\
+        ENDSEC;\nDATA;\n#1=OPEN_SHELL('',(#20));\n#2=DIRECTION('',(1.,0.,0.));\n\
+        #20=ADVANCED_FACE('',(#21),#25,.T.);\n#21=FACE_OUTER_BOUND('',#22,.T.);\n\
+        #22=EDGE_LOOP('',(#24));\n#24=ORIENTED_EDGE('',*,*,#23,.T.);\n\
+        #23=EDGE_CURVE('',#26,#26,#28,.T.);\n#25=PLANE('',#29);\n\
+        #26=VERTEX_POINT('',#27);\n#27=CARTESIAN_POINT('',(0.,0.,2.));\n\
+        #28=CIRCLE('',#29,2.);\n#29=AXIS2_PLACEMENT_3D('',#8,#2,$);\n\
+        #8=CARTESIAN_POINT('',(0.,0.,0.));\nENDSEC;\nEND-ISO-10303-21;\n";
+    let scene = parse(text).expect("the disk loads");
+    assert_eq!(scene.patches.len(), 1, "{:?}", scene.skipped);
+    let (lo, hi) = scene.bbox;
+    assert!(
+        (hi - lo - glam::DVec3::new(0.0, 4.0, 4.0))
+            .abs()
+            .max_element()
+            < 0.1,
+        "{lo} .. {hi}"
+    );
+}
+
 #[test]
 fn unsupported_entities_are_summarised_and_the_rest_renders() {
     let scene = common::load("nist_ctc_01_asme1_rd.stp");

@@ -101,6 +101,8 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
         }
     }
 
+    complete_placements(&mut table);
+
     let mut warnings = structure.warnings.clone();
     if !structure.unsupported.is_empty() {
         let list: Vec<String> = structure
@@ -286,6 +288,50 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
         skipped,
         warnings,
     })
+}
+
+/// Gives every `AXIS2_PLACEMENT_3D` without a usable reference direction (`$`, or parallel to
+/// its axis) the one ISO 10303-42's `build_axes` implies (x, or y when the axis is x).
+/// truck-stepio takes x regardless, which is NaN for a placement whose axis is x: every
+/// circle, cylinder, cone… placed so lost its edges or faces (CATIA writes such placements).
+fn complete_placements(table: &mut Table) {
+    use truck_stepio::r#in::DirectionHolder;
+    let ratios = |d: &Option<PlaceHolder<DirectionHolder>>, table: &Table| -> Option<DVec3> {
+        let h = match d.as_ref()? {
+            PlaceHolder::Ref(Name::Entity(id)) => table.direction.get(id)?,
+            PlaceHolder::Owned(h) => h,
+            _ => return None,
+        };
+        let r = &h.direction_ratios;
+        let v = DVec3::new(*r.first()?, *r.get(1)?, r.get(2).copied().unwrap_or(0.0));
+        v.try_normalize()
+    };
+    let fixes: Vec<(u64, DVec3)> = table
+        .axis2_placement_3d
+        .iter()
+        .filter_map(|(&id, a)| {
+            let z = ratios(&a.axis, table).unwrap_or(DVec3::Z);
+            let x = ratios(&a.ref_direction, table);
+            let usable = x.is_some_and(|x| x.cross(z).length() > 1e-9);
+            if usable {
+                return None;
+            }
+            let default = if z.cross(DVec3::X).length() > 1e-9 {
+                DVec3::X
+            } else {
+                DVec3::Y
+            };
+            Some((id, default))
+        })
+        .collect();
+    for (id, x) in fixes {
+        if let Some(a) = table.axis2_placement_3d.get_mut(&id) {
+            a.ref_direction = Some(PlaceHolder::Owned(DirectionHolder {
+                label: String::new(),
+                direction_ratios: vec![x.x, x.y, x.z],
+            }));
+        }
+    }
 }
 
 /// A face with its bounding box (own coordinates).
