@@ -11,10 +11,11 @@
 //!    `uv`, with `d = |S(uv) − p|`;
 //! 2. the trim loops are rebuilt from the exact edge curves, sampled until their chords are
 //!    within ε/16, projected into parameter space and unwrapped across periodic seams;
-//! 3. `uv` is inside the face when it lies on the face's side of the nearest boundary segment
-//!    (the STEP convention: the face lies to the left of its loops when its sense agrees with
-//!    the surface's, [`TrimmedFace::domain_left`]) — a local test that needs no closing of
-//!    loops that run around a periodic surface;
+//! 3. `uv` is inside the face by the even-odd rule over the loops when every loop closes in
+//!    parameter space; when a loop runs around a periodic surface (and would need closing
+//!    along a pole or the parameter range), by the side of the nearest boundary segment
+//!    instead (the STEP convention: the face lies to the left of its loops when its sense
+//!    agrees with the surface's, [`TrimmedFace::domain_left`]); seams are no boundary;
 //! 4. the sample's error is `d` inside, and its 3D distance to the boundary curves outside
 //!    (the nearest point of the trimmed face then lies on its boundary).
 //!
@@ -235,6 +236,9 @@ struct Boundary {
     periods: (Option<f64>, Option<f64>),
     /// Scales of u and v that make parameter distances roughly 3D distances.
     metric: DVec2,
+    /// An odd number of loops runs around the periodic direction (or both directions are
+    /// periodic): even-odd has no ray out of the domain, the side test decides.
+    wraps: bool,
 }
 
 impl Boundary {
@@ -317,11 +321,55 @@ impl Boundary {
         } else {
             DVec2::ONE
         };
+        let wrapping = loops
+            .iter()
+            .filter(|lp| {
+                let (Some(a), Some(b)) = (lp.first(), lp.last()) else {
+                    return false;
+                };
+                a.1.distance(b.1) > 1e-9 * (1.0 + a.1.length())
+            })
+            .count();
+        // Even-odd needs a ray that leaves the domain: along a direction that is not periodic,
+        // and an even number of loops running around the periodic one.
+        let wraps = wrapping % 2 == 1 || (periods.0.is_some() && periods.1.is_some());
         Boundary {
             loops,
             periods,
             metric,
+            wraps,
         }
+    }
+
+    /// Whether `uv` lies in the trimmed domain: by the side of the nearest boundary segment,
+    /// and, when the loops allow it, by even-odd too (outside only when both say so).
+    fn inside(&self, face: &TrimmedFace, uv: DVec2) -> bool {
+        if self.wraps {
+            return self.inside_by_side(face, uv);
+        }
+        // The ray runs along `r`, crossings are found on `c` (taken modulo its period, if any).
+        let (pu, pv) = self.periods;
+        let (c, r, period) = if pu.is_some() { (0, 1, pu) } else { (1, 0, pv) };
+        let mut odd = false;
+        for lp in &self.loops {
+            for w in lp.windows(2) {
+                let (a, b) = (w[0].1, w[1].1);
+                let mut qc = uv[c];
+                if let Some(p) = period.filter(|p| *p > 0.0) {
+                    qc += ((0.5 * (a[c] + b[c]) - qc) / p).round() * p;
+                }
+                if (a[c] > qc) != (b[c] > qc) {
+                    let t = (qc - a[c]) / (b[c] - a[c]);
+                    if a[r] + t * (b[r] - a[r]) > uv[r] {
+                        odd = !odd;
+                    }
+                }
+            }
+        }
+        // Files do not always orient their loops consistently (even-odd does not care) and
+        // sampled loops can graze a sample (a ray through a vertex): a sample counts as
+        // outside only when the side of its nearest boundary agrees.
+        odd || self.inside_by_side(face, uv)
     }
 
     /// Smallest 3D distance from `p` to the boundary polylines.
@@ -336,7 +384,7 @@ impl Boundary {
     }
 
     /// Whether `uv` lies on the face's side of the nearest boundary segment.
-    fn inside(&self, face: &TrimmedFace, uv: DVec2) -> bool {
+    fn inside_by_side(&self, face: &TrimmedFace, uv: DVec2) -> bool {
         let scale = self.metric;
         // Nearest segment: (distance², loop, segment, parameter along it, uv shifted).
         let mut best: Option<(f64, usize, usize, f64, DVec2)> = None;

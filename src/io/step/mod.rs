@@ -102,6 +102,7 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
     }
 
     complete_placements(&mut table);
+    untrim_swept_curves(&mut table, &file);
 
     let mut warnings = structure.warnings.clone();
     if !structure.unsupported.is_empty() {
@@ -330,6 +331,26 @@ fn complete_placements(table: &mut Table) {
                 label: String::new(),
                 direction_ratios: vec![x.x, x.y, x.z],
             }));
+        }
+    }
+}
+
+/// A swept surface whose curve is a `TRIMMED_CURVE` (truck-stepio reads none) sweeps the
+/// trimmed curve's basis instead: a face is trimmed by its own edges, so the surface may
+/// extend past the trimming points.
+fn untrim_swept_curves(table: &mut Table, file: &p21::P21File) {
+    let basis = |p: &PlaceHolder<truck_stepio::r#in::CurveAnyHolder>| -> Option<u64> {
+        let id = holder_ref(p)?;
+        file.get(id)?.part("TRIMMED_CURVE")?.ref_at(1)
+    };
+    for s in table.surface_of_linear_extrusion.values_mut() {
+        if let Some(b) = basis(&s.swept_curve) {
+            s.swept_curve = PlaceHolder::Ref(Name::Entity(b));
+        }
+    }
+    for s in table.surface_of_revolution.values_mut() {
+        if let Some(b) = basis(&s.swept_curve) {
+            s.swept_curve = PlaceHolder::Ref(Name::Entity(b));
         }
     }
 }
