@@ -36,7 +36,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let meshes = tessellate_scene(&scene, &view, pixel_error);
     let ref_frame = renderer.render(&renderer.upload(&reference), &view, &plain)?;
     let frame = renderer.render(&renderer.upload(&meshes), &view, &drawn)?;
-    let (counts, mask) = classify(&ref_frame, &frame, &view, pixel_error, SENTINEL);
+    let (counts, mask) = classify(&ref_frame, &frame, &view, pixel_error, SENTINEL)?;
     println!("{counts:?}");
     let cracks: Vec<usize> = mask
         .enumerate_pixels()
