@@ -121,6 +121,8 @@ const SUITE: [&str; 5] = [
 #[test]
 fn stress_cracks_every_model_and_only_full_width_fat_borders_close_them() {
     let mut renderer = common::renderer();
+    // Every model is measured before failing, so a failure names all models it hits.
+    let mut failures = Vec::new();
     for file in SUITE {
         let scene = common::load(file);
         let opts = CheckOptions {
@@ -149,11 +151,13 @@ fn stress_cracks_every_model_and_only_full_width_fat_borders_close_them() {
             four.cracks(),
             off.inside
         );
-        // Clearly: at least one crack pixel in a hundred inside pixels' worth of border.
-        assert!(
-            off.cracks() * 100 > off.inside,
-            "{file}: the stress tessellation hardly cracks without fat borders: {off:?}"
-        );
+        // Clearly: more than one crack pixel per hundred inside pixels.
+        if off.cracks() * 100 <= off.inside {
+            failures.push(format!(
+                "{file}: the stress tessellation hardly cracks without fat borders: {off:?}"
+            ));
+        }
+        let margin = contour_margin(opts.pixel_error) as u32;
         for v in &r.views {
             for (fb, c) in v.counts.iter().filter(|(fb, _)| *fb != FatBorders::Off) {
                 // At most one pixel a view: the 6- and 4-vertex templates put the fan apex v_i
@@ -161,26 +165,23 @@ fn stress_cracks_every_model_and_only_full_width_fat_borders_close_them() {
                 // fat border), and a pixel centre within the rasterizer's snapping (1/256 px)
                 // of that line, where the line crosses a gap, is drawn by neither triangle
                 // (bunny, seed 5 view 0: 1 pixel; gone when the quad is split at v_i).
-                assert!(
-                    c.cracks() <= 1,
-                    "{file} view {} fat borders {fb}: {c:?}",
-                    v.index
-                );
-                let margin = contour_margin(opts.pixel_error) as u32;
-                assert!(
-                    c.growth_max_px <= margin + 1,
-                    "{file} view {}: growth {c:?}",
-                    v.index
-                );
+                if c.cracks() > 1 || c.growth_max_px > margin + 1 {
+                    failures.push(format!(
+                        "{file} view {} fat borders {fb} of full width: {c:?}",
+                        v.index
+                    ));
+                }
             }
         }
         for (fb, half) in [(FatBorders::Six, half6), (FatBorders::Four, half4)] {
-            assert!(
-                half.cracks() > 20,
-                "{file}: fat borders {fb} at half width close the stress gaps: {half:?}"
-            );
+            if half.cracks() <= 20 {
+                failures.push(format!(
+                    "{file}: fat borders {fb} at half width close the stress gaps: {half:?}"
+                ));
+            }
         }
     }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
 /// The patch nearest the eye: in front, so most of its border is seen.
