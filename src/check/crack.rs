@@ -183,7 +183,7 @@ fn depth_of<'a>(frame: &'a Frame, which: &'static str) -> Result<&'a [f32], Chec
         .as_deref()
         .ok_or(CheckError::MissingDepth(which))?;
     for (buffer, len) in [("depth", depth.len()), ("colour", frame.color.len() / 4)] {
-        if len != n || (buffer == "colour" && frame.color.len() % 4 != 0) {
+        if len != n || (buffer == "colour" && !frame.color.len().is_multiple_of(4)) {
             return Err(CheckError::BufferLength {
                 which,
                 buffer,
