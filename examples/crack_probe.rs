@@ -3,7 +3,8 @@
 //! the tolerance and measured error of both meshes of the patch in front. A reference patch
 //! whose error exceeds its tolerance reports cracks that are not there.
 //!
-//! `cargo run --release --example crack_probe -- FILE SEED VIEW` (512×384, 0.5 px, fat borders 6)
+//! `cargo run --release --example crack_probe -- FILE SEED VIEW [stress] [WxH]` (512×384,
+//! 0.5 px, fat borders 6; `stress`: the crack check's stress tessellation).
 
 use patchwork::check::crack::{
     SENTINEL, check_render_options, classify, random_view, reference_meshes,
@@ -13,11 +14,15 @@ use patchwork::tessellate::{PatchMesh, tessellate_scene};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let [file, seed, index] = args.as_slice() else {
-        return Err("usage: crack_probe FILE SEED VIEW".into());
+    let [file, seed, index, rest @ ..] = args.as_slice() else {
+        return Err("usage: crack_probe FILE SEED VIEW [stress] [WxH]".into());
+    };
+    let stress = rest.iter().any(|a| a == "stress");
+    let size = match rest.iter().find_map(|a| a.split_once('x')) {
+        Some((w, h)) => (w.parse()?, h.parse()?),
+        None => (512, 384),
     };
     let scene = patchwork::io::load(std::path::Path::new(file))?;
-    let size = (512, 384);
     let view = random_view(
         &scene,
         seed.parse()?,
@@ -33,10 +38,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ..drawn
     };
     let (reference, _) = reference_meshes(&scene, &view, pixel_error);
-    let meshes = tessellate_scene(&scene, &view, pixel_error);
+    let meshes = if stress {
+        patchwork::check::stress::stress_tessellation(&scene, &view, pixel_error)
+    } else {
+        tessellate_scene(&scene, &view, pixel_error)
+    };
     let ref_frame = renderer.render(&renderer.upload(&reference), &view, &plain)?;
     let frame = renderer.render(&renderer.upload(&meshes), &view, &drawn)?;
-    let (counts, mask) = classify(&ref_frame, &frame, &view, pixel_error, SENTINEL);
+    let (counts, mask) = classify(&ref_frame, &frame, &view, pixel_error, SENTINEL)?;
     println!("{counts:?}");
     let cracks: Vec<usize> = mask
         .enumerate_pixels()
@@ -71,14 +80,104 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for (k, &i) in cracks.iter().enumerate() {
         let (x, y) = (i % size.0 as usize, i / size.0 as usize);
         println!(
-            "({x},{y}): drawn depth {:.4}, reference depth {:.4}",
+            "({x},{y}): drawn depth {:.4}, reference depth {:.4}, pixel {:.4}",
             depth(&frame, i),
-            depth(&ref_frame, i)
+            depth(&ref_frame, i),
+            view.pixel_size_at(depth(&ref_frame, i) as f64)
         );
+        for dy in -2i64..=2 {
+            let row: Vec<String> = (-2i64..=2)
+                .map(|dx| {
+                    let j = (y as i64 + dy) as usize * size.0 as usize + (x as i64 + dx) as usize;
+                    format!("{:.4}/{:.4}", depth(&ref_frame, j), depth(&frame, j))
+                })
+                .collect();
+            println!("    {}", row.join("  "));
+        }
         println!(
             "  drawn hits {:?}\n  reference hits {:?}",
             hits[k].0, hits[k].1
         );
+        // Border polylines near the pixel: distance (px) of the pixel centre to each patch's
+        // projected border, its ε in pixels there and the border's turn at the nearest vertex.
+        let c = (x as f64 + 0.5, y as f64 + 0.5);
+        for m in &meshes {
+            let mut best = (f64::INFINITY, 0.0, 0.0);
+            for ring in &m.borders {
+                let n = ring.len();
+                for j in 0..n {
+                    let at = |o: usize| m.positions[ring[(j + o) % n] as usize].as_dvec3();
+                    let (Some(a), Some(b)) = (view.project(at(0)), view.project(at(1))) else {
+                        continue;
+                    };
+                    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+                    let l2 = (dx * dx + dy * dy).max(1e-12);
+                    let t = (((c.0 - a.0) * dx + (c.1 - a.1) * dy) / l2).clamp(0.0, 1.0);
+                    let d = ((a.0 + t * dx - c.0).powi(2) + (a.1 + t * dy - c.1).powi(2)).sqrt();
+                    if d < best.0 {
+                        let (s0, s1) =
+                            ((at(0) - at(n - 1)).normalize(), (at(1) - at(0)).normalize());
+                        let turn = s0.dot(s1).clamp(-1.0, 1.0).acos().to_degrees();
+                        best = (d, m.eps_border() / view.pixel_size_at(a.2), turn);
+                    }
+                }
+            }
+            if best.0 < 1.0 {
+                // The CPU twin of this patch's 6-vertex fat border: does a triangle cover c?
+                let g = patchwork::render::BorderGeometry::of(std::slice::from_ref(m));
+                let eye = view.eye.as_vec3();
+                let mut inside = 0;
+                for tri in g.indices[0].chunks_exact(3) {
+                    let q: Vec<(f64, f64)> = tri
+                        .iter()
+                        .filter_map(|&i| {
+                            view.project(g.vertices[i as usize].expanded(eye).as_dvec3())
+                        })
+                        .map(|p| (p.0, p.1))
+                        .collect();
+                    let near = q.iter().any(|p| (p.0 - c.0).hypot(p.1 - c.1) < 0.7);
+                    if near && q.len() == 3 {
+                        let codes: Vec<u32> =
+                            tri.iter().map(|&i| g.vertices[i as usize].code).collect();
+                        println!("      tri {q:.3?} codes {codes:?}");
+                    }
+                    if q.len() == 3 {
+                        let side = |a: (f64, f64), b: (f64, f64)| {
+                            (b.0 - a.0) * (c.1 - a.1) - (b.1 - a.1) * (c.0 - a.0)
+                        };
+                        let s = [side(q[0], q[1]), side(q[1], q[2]), side(q[2], q[0])];
+                        if s.iter().all(|v| *v >= 0.0) || s.iter().all(|v| *v <= 0.0) {
+                            inside += 1;
+                            println!("    covered by fat-border triangle {q:?}");
+                        }
+                    }
+                }
+                println!(
+                    "    {inside} fat-border triangles of patch {} cover it",
+                    m.patch_id
+                );
+                for ring in &m.borders {
+                    for (j, &v) in ring.iter().enumerate() {
+                        let p = view.project(m.positions[v as usize].as_dvec3());
+                        if let Some(p) = p
+                            && (p.0 - c.0).abs() < 2.0
+                            && (p.1 - c.1).abs() < 2.0
+                        {
+                            println!(
+                                "      ring vertex {j} (#{v}) at ({:.3}, {:.3}) depth {:.4}",
+                                p.0, p.1, p.2
+                            );
+                        }
+                    }
+                }
+            }
+            if best.0 < 3.0 {
+                println!(
+                    "  patch {} border {:.3} px away, ε {:.3} px, turn {:.0}° at its vertex",
+                    m.patch_id, best.0, best.1, best.2
+                );
+            }
+        }
         if let Some(&(id, _)) = hits[k].1.iter().min_by(|a, b| a.1.total_cmp(&b.1)) {
             let find = |ms: &[PatchMesh]| ms.iter().find(|m| m.patch_id == id).map(describe);
             println!(

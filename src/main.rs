@@ -320,6 +320,13 @@ struct CheckArgs {
     /// moves).
     #[arg(long, default_value = "auto")]
     primitives: Primitives,
+    /// Stress tessellation: every border pulled back towards its patch as far as the pixel
+    /// error allows, so that only fat borders of full width close the gaps.
+    #[arg(long)]
+    stress: bool,
+    /// Also measure the fat borders drawn this much narrower (a mutation: 0.5 must crack).
+    #[arg(long)]
+    narrowed_width: Option<f64>,
 }
 
 fn parse_triple<T: std::str::FromStr>(s: &str, what: &str) -> Result<[T; 3], String> {
@@ -981,6 +988,8 @@ fn cmd_check(args: &CheckArgs) -> Result<bool, CliError> {
         size: args.size,
         fov_y: args.fov.to_radians(),
         save_failures: args.save_failures.clone(),
+        stress: args.stress,
+        narrowed_width: args.narrowed_width,
         ..CheckOptions::default()
     };
     let pb = ProgressBar::new(args.views as u64);
@@ -1043,6 +1052,19 @@ fn cmd_check(args: &CheckArgs) -> Result<bool, CliError> {
             t.growth_max_px,
             t.inside
         );
+    }
+    if let Some(f) = args.narrowed_width {
+        for v in variants.iter().filter(|v| **v != FatBorders::Off) {
+            let t = report.total_narrowed(*v);
+            println!(
+                "  fat borders {:<3} × {f}  crack pixels {:>7} (background {}, surface behind {}), growth pixels {}",
+                v.name(),
+                t.cracks(),
+                t.background,
+                t.behind,
+                t.growth
+            );
+        }
     }
     let ok = report.crack_free();
     println!(

@@ -20,7 +20,7 @@ use std::time::Instant;
 use glam::DVec3;
 
 use crate::check::crack::{
-    CrackCounts, SENTINEL, check_render_options, classify, reference_meshes,
+    CheckError, CrackCounts, SENTINEL, check_render_options, classify, reference_meshes,
 };
 use crate::lod::{FrameLoop, LodOptions};
 use crate::model::{Scene, Sphere};
@@ -256,6 +256,9 @@ pub struct AnimRecord {
     pub max_error_px: f64,
     /// With [`AnimOptions::check`]: crack and growth pixels (fat borders as drawn).
     pub cracks: Option<CrackCounts>,
+    /// With [`AnimOptions::check`] and fat borders drawn: the control, the same frame's
+    /// counts with fat borders off (shows that the check sees the cracks they close).
+    pub cracks_off: Option<CrackCounts>,
 }
 
 /// The growth an animation frame may show, as a sentence, and whether `c` stays within it.
@@ -308,7 +311,7 @@ pub fn run(
     view: &View,
     opts: &AnimOptions,
     mut on_frame: impl FnMut(&AnimRecord, &Frame) -> Result<(), RenderError>,
-) -> Result<Vec<AnimRecord>, RenderError> {
+) -> Result<Vec<AnimRecord>, CheckError> {
     let n = opts.frames.max(1);
     let explosion = Explosion::new(scene, opts.by, opts.distance);
     let draw = RenderOptions {
@@ -333,22 +336,19 @@ pub fn run(
         }
         let frame_ms = start.elapsed().as_secs_f64() * 1e3;
         let (max_error_px, _) = lod.screen_errors();
-        let cracks = if opts.check {
+        let (cracks, cracks_off) = if opts.check {
             let pe = lod.options.pixel_error;
             let (reference, _) = reference_meshes(&moved, view, pe);
             let reference = translated(reference.iter().enumerate(), &offsets);
-            let reference = renderer.render(
-                &renderer.upload(&reference),
-                view,
-                &RenderOptions {
-                    fat_borders: FatBorders::Off,
-                    ..check
-                },
-            )?;
+            let plain = RenderOptions {
+                fat_borders: FatBorders::Off,
+                ..check
+            };
+            let reference = renderer.render(&renderer.upload(&reference), view, &plain)?;
             let actual = renderer.render(&gpu, view, &check)?;
-            // The drawn tessellation may lag behind the view (the queue's budget): its
-            // tolerance is the error it has.
-            let (c, mask) = classify(&reference, &actual, view, max_error_px.max(pe), SENTINEL);
+            // At the pixel error asked: a patch drawn coarser than asked (the queue behind)
+            // is still closed by its own, wider, fat borders.
+            let (c, mask) = classify(&reference, &actual, view, pe, SENTINEL)?;
             if let Some(dir) = &opts.save_failures
                 && (c.cracks() > 0 || c.growth > 0)
             {
@@ -359,9 +359,15 @@ pub fn run(
                     }
                 }
             }
-            Some(c)
+            let off = if check.fat_borders == FatBorders::Off {
+                None
+            } else {
+                let actual = renderer.render(&gpu, view, &plain)?;
+                Some(classify(&reference, &actual, view, pe, SENTINEL)?.0)
+            };
+            (Some(c), off)
         } else {
-            None
+            (None, None)
         };
         let record = AnimRecord {
             frame: k,
@@ -372,6 +378,7 @@ pub fn run(
             triangles: stats.triangles,
             max_error_px,
             cracks,
+            cracks_off,
         };
         on_frame(&record, &frame)?;
         records.push(record);

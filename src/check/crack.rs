@@ -150,25 +150,74 @@ pub fn contour_margin(pixel_error: f64) -> usize {
     (pixel_error.ceil() as usize).max(1)
 }
 
+/// Why two images cannot be compared, or why a check could not render.
+#[derive(Debug, thiserror::Error)]
+pub enum CheckError {
+    #[error(transparent)]
+    Render(#[from] RenderError),
+    /// An image was rendered without depth (`RenderOptions::depth`).
+    #[error("the {0} image has no depth buffer (render it with `RenderOptions::depth`)")]
+    MissingDepth(&'static str),
+    /// The two images differ in size.
+    #[error("the reference is {reference:?} px but the actual image is {actual:?} px")]
+    SizeMismatch {
+        reference: (u32, u32),
+        actual: (u32, u32),
+    },
+    /// An image's colour or depth buffer does not hold one value per pixel.
+    #[error("the {which} image's {buffer} buffer has {len} values for {width}×{height} pixels")]
+    BufferLength {
+        which: &'static str,
+        buffer: &'static str,
+        len: usize,
+        width: u32,
+        height: u32,
+    },
+}
+
+/// Checks that `frame` has depth and colour for each of its pixels; returns its depth.
+fn depth_of<'a>(frame: &'a Frame, which: &'static str) -> Result<&'a [f32], CheckError> {
+    let n = frame.width as usize * frame.height as usize;
+    let depth = frame
+        .depth
+        .as_deref()
+        .ok_or(CheckError::MissingDepth(which))?;
+    for (buffer, len) in [("depth", depth.len()), ("colour", frame.color.len() / 4)] {
+        if len != n || (buffer == "colour" && !frame.color.len().is_multiple_of(4)) {
+            return Err(CheckError::BufferLength {
+                which,
+                buffer,
+                len,
+                width: frame.width,
+                height: frame.height,
+            });
+        }
+    }
+    Ok(depth)
+}
+
 /// Counts crack and growth pixels of `actual` against `reference` (both rendered with depth,
 /// the same view and size). Also returns a mask image: red = background crack, orange = a
-/// surface behind showing, blue = growth.
+/// surface behind showing, blue = growth. Images without depth or of different sizes are an
+/// error, never "no cracks".
 pub fn classify(
     reference: &Frame,
     actual: &Frame,
     view: &View,
     pixel_error: f64,
     background: [u8; 3],
-) -> (CrackCounts, image::RgbaImage) {
+) -> Result<(CrackCounts, image::RgbaImage), CheckError> {
+    if (reference.width, reference.height) != (actual.width, actual.height) {
+        return Err(CheckError::SizeMismatch {
+            reference: (reference.width, reference.height),
+            actual: (actual.width, actual.height),
+        });
+    }
+    let rd = depth_of(reference, "reference")?;
+    let ad = depth_of(actual, "actual")?;
     let (w, h) = (reference.width as usize, reference.height as usize);
-    let empty = Vec::new();
-    let rd = reference.depth.as_ref().unwrap_or(&empty);
-    let ad = actual.depth.as_ref().unwrap_or(&empty);
     let mut mask = image::RgbaImage::new(w as u32, h as u32);
     let mut counts = CrackCounts::default();
-    if rd.len() != w * h || ad.len() != w * h || actual.width as usize != w {
-        return (counts, mask);
-    }
     let r = contour_margin(pixel_error);
     // Over the (2r+1)² window: is every pixel covered, and the farthest covered depth.
     let cover: Vec<f32> = rd
@@ -215,7 +264,7 @@ pub fn classify(
             );
         }
     }
-    (counts, mask)
+    Ok((counts, mask))
 }
 
 /// Separable min/max filter over a (2r+1)² window; pixels outside the image count as `outside`.
@@ -358,6 +407,14 @@ pub struct CheckOptions {
     pub fov_y: f64,
     /// Variants to measure; include [`FatBorders::Off`] to show the cracks they cover.
     pub variants: Vec<FatBorders>,
+    /// Draw the stress tessellation ([`super::stress::stress_tessellation`]): every border
+    /// pulled back towards its patch as far as the pixel error allows, so that shared borders
+    /// gap by most of ε_a + ε_b and only fat borders of full width close them.
+    pub stress: bool,
+    /// Also measure every fat-border variant of `variants` with its ε scaled by this factor
+    /// (a mutation: fat borders narrower than the paper's must let cracks through); the
+    /// counts go to [`ViewResult::narrowed`].
+    pub narrowed_width: Option<f64>,
     /// Where to write `view{i}-fb{v}-actual.png` / `-diff.png` for images with cracks.
     pub save_failures: Option<PathBuf>,
 }
@@ -376,6 +433,8 @@ impl Default for CheckOptions {
                 FatBorders::Four,
                 FatBorders::Two,
             ],
+            stress: false,
+            narrowed_width: None,
             save_failures: None,
         }
     }
@@ -389,6 +448,9 @@ pub struct ViewResult {
     pub reference_grid: u32,
     pub stats: MeshStats,
     pub counts: Vec<(FatBorders, CrackCounts)>,
+    /// With [`CheckOptions::narrowed_width`]: the fat-border variants drawn that much
+    /// narrower.
+    pub narrowed: Vec<(FatBorders, CrackCounts)>,
 }
 
 /// All views of a check.
@@ -397,25 +459,35 @@ pub struct CheckReport {
     pub views: Vec<ViewResult>,
 }
 
+fn sum_counts<'a>(
+    counts: impl Iterator<Item = &'a (FatBorders, CrackCounts)>,
+    variant: FatBorders,
+) -> CrackCounts {
+    let mut t = CrackCounts::default();
+    for (fb, c) in counts {
+        if *fb == variant {
+            t.inside += c.inside;
+            t.background += c.background;
+            t.behind += c.behind;
+            t.growth += c.growth;
+            t.growth_max_px = t.growth_max_px.max(c.growth_max_px);
+        }
+    }
+    t
+}
+
 impl CheckReport {
     /// Sum of counts over all views for one variant.
     pub fn total(&self, variant: FatBorders) -> CrackCounts {
-        let mut t = CrackCounts::default();
-        for v in &self.views {
-            for (fb, c) in &v.counts {
-                if *fb == variant {
-                    t.inside += c.inside;
-                    t.background += c.background;
-                    t.behind += c.behind;
-                    t.growth += c.growth;
-                    t.growth_max_px = t.growth_max_px.max(c.growth_max_px);
-                }
-            }
-        }
-        t
+        sum_counts(self.views.iter().flat_map(|v| &v.counts), variant)
     }
 
-    /// True when no view drawn with fat borders shows a crack pixel.
+    /// Sum over all views for one variant drawn narrowed ([`CheckOptions::narrowed_width`]).
+    pub fn total_narrowed(&self, variant: FatBorders) -> CrackCounts {
+        sum_counts(self.views.iter().flat_map(|v| &v.narrowed), variant)
+    }
+
+    /// True when no view drawn with fat borders (of full width) shows a crack pixel.
     pub fn crack_free(&self) -> bool {
         self.views
             .iter()
@@ -437,14 +509,35 @@ pub fn check_render_options(fat_borders: FatBorders) -> RenderOptions {
     }
 }
 
+/// Scales the ε every mesh declares (target and achieved) by `factor`: their fat borders
+/// are then drawn that much narrower; the triangles do not change.
+pub fn narrow_fat_borders(meshes: &mut [PatchMesh], factor: f64) {
+    for m in meshes {
+        m.eps_target *= factor;
+        m.error *= factor;
+    }
+}
+
 /// Renders `opts.views` random views of `scene` and counts cracks and growth per variant.
 /// `on_view` is called after each view (progress).
 pub fn run_check(
     renderer: &mut Renderer,
     scene: &Scene,
     opts: &CheckOptions,
+    on_view: impl FnMut(&ViewResult),
+) -> Result<CheckReport, CheckError> {
+    run_check_with(renderer, scene, opts, |_, _| {}, on_view)
+}
+
+/// As [`run_check`], with `mutate` applied to every view's meshes before they are drawn
+/// (tests inject faults with it to show the check finds them).
+pub fn run_check_with(
+    renderer: &mut Renderer,
+    scene: &Scene,
+    opts: &CheckOptions,
+    mut mutate: impl FnMut(&View, &mut Vec<PatchMesh>),
     mut on_view: impl FnMut(&ViewResult),
-) -> Result<CheckReport, RenderError> {
+) -> Result<CheckReport, CheckError> {
     let mut report = CheckReport::default();
     let base = check_render_options(FatBorders::Off);
     for index in 0..opts.views {
@@ -452,23 +545,36 @@ pub fn run_check(
         let (ref_meshes, grid) = reference_meshes(scene, &view, opts.pixel_error);
         let ref_gpu = renderer.upload(&ref_meshes);
         let reference = renderer.render(&ref_gpu, &view, &base)?;
-        let meshes = tessellate_scene(scene, &view, opts.pixel_error);
+        let mut meshes = if opts.stress {
+            super::stress::stress_tessellation(scene, &view, opts.pixel_error)
+        } else {
+            tessellate_scene(scene, &view, opts.pixel_error)
+        };
+        mutate(&view, &mut meshes);
+        let stats = MeshStats::of(&meshes);
         let gpu = renderer.upload(&meshes);
+        let narrow_gpu = opts.narrowed_width.map(|factor| {
+            narrow_fat_borders(&mut meshes, factor);
+            (factor, renderer.upload(&meshes))
+        });
         let mut counts = Vec::new();
-        for &variant in &opts.variants {
+        let mut measure = |gpu: &crate::render::GpuMeshes,
+                           variant: FatBorders,
+                           tag: &str|
+         -> Result<CrackCounts, CheckError> {
             let frame = renderer.render(
-                &gpu,
+                gpu,
                 &view,
                 &RenderOptions {
                     fat_borders: variant,
                     ..base
                 },
             )?;
-            let (c, mask) = classify(&reference, &frame, &view, opts.pixel_error, SENTINEL);
+            let (c, mask) = classify(&reference, &frame, &view, opts.pixel_error, SENTINEL)?;
             if let Some(dir) = &opts.save_failures
                 && (c.cracks() > 0 || c.growth > 0)
             {
-                let stem = format!("view{index:03}-fb{}", variant.name());
+                let stem = format!("view{index:03}-fb{}{tag}", variant.name());
                 // Failure images are a diagnostic aid; a failure to write them is reported on
                 // stderr but does not hide the counts.
                 for (suffix, img) in [("actual", frame.to_rgba_image()), ("diff", mask)] {
@@ -478,14 +584,24 @@ pub fn run_check(
                     }
                 }
             }
-            counts.push((variant, c));
+            Ok(c)
+        };
+        for &variant in &opts.variants {
+            counts.push((variant, measure(&gpu, variant, "")?));
+        }
+        let mut narrowed = Vec::new();
+        if let Some((factor, gpu)) = &narrow_gpu {
+            for &variant in opts.variants.iter().filter(|v| **v != FatBorders::Off) {
+                narrowed.push((variant, measure(gpu, variant, &format!("-x{factor}"))?));
+            }
         }
         let result = ViewResult {
             index,
             view,
             reference_grid: grid,
-            stats: MeshStats::of(&meshes),
+            stats,
             counts,
+            narrowed,
         };
         on_view(&result);
         report.views.push(result);
@@ -551,7 +667,8 @@ mod tests {
         ad[5 * 8 + 4] = 5.001; // within tolerance: not a crack
         ad[0] = 5.0; // growth 1 px outside: not counted (distance 1)
         let actual = frame(w, h, ad, SENTINEL, [128; 3]);
-        let (c, _) = classify(&reference, &actual, &test_view(), 0.5, SENTINEL);
+        let (c, _) =
+            classify(&reference, &actual, &test_view(), 0.5, SENTINEL).expect("comparable");
         assert_eq!(c.inside, 4 * 4);
         assert_eq!(c.background, 1);
         assert_eq!(c.behind, 1);
@@ -569,7 +686,8 @@ mod tests {
             })
             .collect();
         let reference = frame(w, h, small, SENTINEL, [128; 3]);
-        let (c, _) = classify(&reference, &actual, &test_view(), 0.5, SENTINEL);
+        let (c, _) =
+            classify(&reference, &actual, &test_view(), 0.5, SENTINEL).expect("comparable");
         assert!(c.growth > 0);
         assert!(c.growth_max_px >= 2);
     }
@@ -586,10 +704,60 @@ mod tests {
             })
             .collect();
         let f = frame(8, 8, d, SENTINEL, [128; 3]);
-        let (c, _) = classify(&f, &f, &test_view(), 0.5, SENTINEL);
+        let (c, _) = classify(&f, &f, &test_view(), 0.5, SENTINEL).expect("comparable");
         assert_eq!(c.cracks(), 0);
         assert_eq!(c.growth, 0);
         assert!(c.inside > 0);
+    }
+
+    /// Images that cannot be compared are an error, never "no cracks" (it used to return zero
+    /// counts: a check on a frame rendered without depth passed).
+    #[test]
+    fn incomparable_images_are_errors() {
+        let d: Vec<f32> = (0..64)
+            .map(|i| if i % 8 > 0 { 3.0 } else { f32::INFINITY })
+            .collect();
+        let good = frame(8, 8, d.clone(), SENTINEL, [128; 3]);
+        let v = test_view();
+        let mut no_depth = good.clone();
+        no_depth.depth = None;
+        assert!(matches!(
+            classify(&good, &no_depth, &v, 0.5, SENTINEL),
+            Err(CheckError::MissingDepth("actual"))
+        ));
+        assert!(matches!(
+            classify(&no_depth, &good, &v, 0.5, SENTINEL),
+            Err(CheckError::MissingDepth("reference"))
+        ));
+        let wide = frame(16, 4, d.clone(), SENTINEL, [128; 3]);
+        assert!(matches!(
+            classify(&good, &wide, &v, 0.5, SENTINEL),
+            Err(CheckError::SizeMismatch {
+                reference: (8, 8),
+                actual: (16, 4)
+            })
+        ));
+        let mut short = good.clone();
+        short.depth = Some(d[..60].to_vec());
+        assert!(matches!(
+            classify(&good, &short, &v, 0.5, SENTINEL),
+            Err(CheckError::BufferLength {
+                buffer: "depth",
+                len: 60,
+                ..
+            })
+        ));
+        let mut short = good.clone();
+        short.color.truncate(4 * 63);
+        assert!(matches!(
+            classify(&short, &good, &v, 0.5, SENTINEL),
+            Err(CheckError::BufferLength {
+                which: "reference",
+                buffer: "colour",
+                ..
+            })
+        ));
+        assert!(classify(&good, &good, &v, 0.5, SENTINEL).is_ok());
     }
 
     #[test]
