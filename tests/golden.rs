@@ -1,12 +1,19 @@
-//! Golden images of the lit teapot at three fixed views, compared with FLIP.
+//! Golden images of the lit teapot at three fixed views, compared with FLIP, and patch-ID
+//! goldens (`*-ids.png`) compared patch by patch, with mutation tests that prove the ID
+//! comparison fails for a missing patch, a 1 px camera shift, a 2× coarser tessellation and
+//! fat borders off.
 //! Regenerate only with `GOLDEN_UPDATE=1` and say why in the commit.
 
 mod common;
 
 use glam::DVec3;
-use patchwork::check::golden::{GoldenOutcome, Thresholds, compare_with_golden};
-use patchwork::render::{Primitives, RenderOptions, Shading};
-use patchwork::tessellate::tessellate_scene;
+use patchwork::check::golden::{
+    GoldenError, GoldenOutcome, IdComparison, IdImage, IdThresholds, Thresholds, compare_ids,
+    compare_ids_with_golden, compare_with_golden, read_id_golden,
+};
+use patchwork::model::Scene;
+use patchwork::render::{FatBorders, Primitives, RenderOptions, Renderer, Shading};
+use patchwork::tessellate::{PatchMesh, tessellate_scene};
 use patchwork::view::{self, View};
 
 fn golden(name: &str, dir: Option<DVec3>) {
@@ -101,4 +108,197 @@ fn step_models() {
     ] {
         golden_of(common::load(file), name, None);
     }
+}
+
+/// The golden views' camera: framing the scene from `dir` (default three-quarter view).
+fn golden_view(scene: &Scene, dir: Option<DVec3>) -> View {
+    let up = scene.up.vector();
+    let fov = view::DEFAULT_FOV_Y_DEG.to_radians();
+    let size = (400, 300);
+    match dir {
+        None => View::framing(&scene.bounds, up, fov, size),
+        Some(d) => View::framing_from(&scene.bounds, up, d, fov, size),
+    }
+}
+
+/// The patch IDs of `meshes` (one sample per pixel, fat borders as given).
+fn ids_of(
+    renderer: &mut Renderer,
+    meshes: &[PatchMesh],
+    v: &View,
+    fat_borders: FatBorders,
+) -> IdImage {
+    let gpu = renderer.upload(meshes);
+    let opts = RenderOptions {
+        shading: Shading::Ids,
+        fat_borders,
+        ids: true,
+        ..RenderOptions::default()
+    };
+    let frame = renderer.render(&gpu, v, &opts).expect("render");
+    IdImage::from_frame(&frame).expect("ids were asked for")
+}
+
+fn id_golden(scene: Scene, name: &str, dir: Option<DVec3>) {
+    let v = golden_view(&scene, dir);
+    let meshes = tessellate_scene(&scene, &v, view::DEFAULT_PIXEL_ERROR);
+    let ids = ids_of(&mut common::renderer(), &meshes, &v, FatBorders::Six);
+    let path = common::root()
+        .join("golden")
+        .join(format!("{name}-ids.png"));
+    match compare_ids_with_golden(&path, &ids, &IdThresholds::default()) {
+        Ok(Some(c)) => eprintln!("{name}-ids: {c:?}"),
+        Ok(None) => eprintln!("{name}-ids: golden rewritten (GOLDEN_UPDATE=1)"),
+        Err(e) => panic!("{e}"),
+    }
+}
+
+#[test]
+fn teapot_ids_default_view() {
+    id_golden(common::teapot(), "teapot-default", None);
+}
+
+#[test]
+fn teapot_ids_from_above() {
+    id_golden(
+        common::teapot(),
+        "teapot-above",
+        Some(DVec3::new(0.2, -0.3, 1.0)),
+    );
+}
+
+#[test]
+fn teapot_ids_from_the_side() {
+    id_golden(
+        common::teapot(),
+        "teapot-side",
+        Some(DVec3::new(0.0, -1.0, 0.15)),
+    );
+}
+
+#[test]
+fn step_as1_ids() {
+    id_golden(common::load("as1-oc-214.stp"), "step-as1", None);
+}
+
+/// One mutation's comparison against the golden, printed as a row of the mutation table.
+fn judged(name: &str, c: &IdComparison, t: &IdThresholds) -> bool {
+    let failures = c.failures(t);
+    eprintln!(
+        "{name:<28} differing {:>6.3} % (max {:.3} %), holes {:>4} (max {}), worst count {:?}, \
+         centroid {:?}, bbox {:?} -> {}",
+        100.0 * c.differing_fraction(),
+        100.0 * t.differing,
+        c.holes,
+        t.holes,
+        c.worst_count
+            .map(|w| format!("patch {} {}→{} ({:.2}× limit)", w.0, w.1, w.2, w.3)),
+        c.worst_centroid.map(|w| format!("{:.3} px", w.1)),
+        c.worst_bbox.map(|w| w.1),
+        if failures.is_empty() {
+            "PASSES"
+        } else {
+            "fails"
+        }
+    );
+    !failures.is_empty()
+}
+
+/// The teapot's default-view ID golden fails for every mutation the FLIP goldens missed:
+/// each patch covering ≥ 0.05 % of the image removed, the camera moved by 1 px, a 2× coarser
+/// tessellation, fat borders off.
+#[test]
+fn id_golden_fails_for_every_mutation() {
+    let scene = common::teapot();
+    let v = golden_view(&scene, None);
+    let t = IdThresholds::default();
+    let path = common::root().join("golden").join("teapot-default-ids.png");
+    let golden = match read_id_golden(&path) {
+        Ok(g) => g,
+        Err(e @ GoldenError::Missing(_)) if patchwork::check::golden::update_requested() => {
+            eprintln!("{e}: written by teapot_ids_default_view");
+            return;
+        }
+        Err(e) => panic!("{e}"),
+    };
+    let mut renderer = common::renderer();
+    let meshes = tessellate_scene(&scene, &v, view::DEFAULT_PIXEL_ERROR);
+    let same = compare_ids(
+        &golden,
+        &ids_of(&mut renderer, &meshes, &v, FatBorders::Six),
+        &t,
+    );
+    assert!(!judged("none (the golden's own render)", &same, &t));
+    let mut missed = Vec::new();
+    // Every patch covering at least 0.05 % of the image.
+    let min = (golden.ids.len() as f64 * 0.0005).ceil() as usize;
+    let footprints = golden.footprints();
+    let mut removed = 0;
+    for m in &meshes {
+        let covers = footprints
+            .get(m.patch_id as usize + 1)
+            .copied()
+            .flatten()
+            .map_or(0, |f| f.pixels);
+        if covers < min {
+            continue;
+        }
+        removed += 1;
+        let rest: Vec<PatchMesh> = meshes
+            .iter()
+            .filter(|o| o.patch_id != m.patch_id)
+            .cloned()
+            .collect();
+        let c = compare_ids(
+            &golden,
+            &ids_of(&mut renderer, &rest, &v, FatBorders::Six),
+            &t,
+        );
+        if !judged(
+            &format!("patch {} ({covers} px) removed", m.patch_id),
+            &c,
+            &t,
+        ) {
+            missed.push(format!("patch {} removed", m.patch_id));
+        }
+    }
+    assert!(removed >= 20, "only {removed} patches cover ≥ {min} px");
+    // The camera moved sideways by one pixel (at the target's distance).
+    let right = (v.target - v.eye).cross(v.up).normalize();
+    let step = right * v.pixel_size_at((v.target - v.eye).length());
+    let shifted = View::new(
+        v.eye + step,
+        v.target + step,
+        v.up,
+        v.fov_y,
+        (v.width, v.height),
+        &scene.bounds,
+    );
+    let shifted_meshes = tessellate_scene(&scene, &shifted, view::DEFAULT_PIXEL_ERROR);
+    let c = compare_ids(
+        &golden,
+        &ids_of(&mut renderer, &shifted_meshes, &shifted, FatBorders::Six),
+        &t,
+    );
+    if !judged("camera moved 1 px", &c, &t) {
+        missed.push("1 px camera shift".into());
+    }
+    let coarse = tessellate_scene(&scene, &v, 2.0 * view::DEFAULT_PIXEL_ERROR);
+    let c = compare_ids(
+        &golden,
+        &ids_of(&mut renderer, &coarse, &v, FatBorders::Six),
+        &t,
+    );
+    if !judged("pixel error ×2", &c, &t) {
+        missed.push("2× coarser tessellation".into());
+    }
+    let c = compare_ids(
+        &golden,
+        &ids_of(&mut renderer, &meshes, &v, FatBorders::Off),
+        &t,
+    );
+    if !judged("fat borders off", &c, &t) {
+        missed.push("fat borders off".into());
+    }
+    assert!(missed.is_empty(), "the ID golden passes with: {missed:?}");
 }
