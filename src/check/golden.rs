@@ -521,14 +521,36 @@ pub fn compare_ids_with_golden(
 /// Fat borders on and off against the watertight reference, at one view and pixel error.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BorderShading {
-    /// FLIP of the lit image with fat borders ([`FatBorders::Six`]) against the reference.
+    /// FLIP of the lit image with fat borders ([`FatBorders::Six`]) against the reference,
+    /// over the whole image.
     pub on: FlipScore,
     /// The same without fat borders (the cracks they hide).
     pub off: FlipScore,
+    /// Mean FLIP over the pixels outside the band a contour may grow into (within ⌈γ⌉ + 1 px
+    /// of the reference's silhouette or of an occluding contour, a depth jump steeper than
+    /// `crack::MAX_SLOPE`): what the fat borders cost where they are not allowed to differ,
+    /// against what the cracks cost there.
+    pub interior_on: f32,
+    pub interior_off: f32,
     /// Largest Chebyshev distance (px) from a covered pixel to the reference's silhouette,
     /// with fat borders and without.
     pub growth_on_px: u32,
     pub growth_off_px: u32,
+    /// Pixels covered with fat borders but not in the reference (fins), one sample per pixel.
+    pub fin_pixels: usize,
+    /// Mean over the fins of the largest RGB channel difference (0–1) from the nearest
+    /// reference pixel: how unlike the surface they extend the fins are shaded.
+    pub fin_contrast: f32,
+}
+
+/// Per-pixel FLIP error of `test` against `reference`.
+pub fn flip_map(reference: &image::RgbaImage, test: &image::RgbaImage) -> Vec<f32> {
+    nv_flip::flip(
+        to_flip(reference),
+        to_flip(test),
+        nv_flip::DEFAULT_PIXELS_PER_DEGREE,
+    )
+    .to_vec()
 }
 
 /// Renders `scene` at `pixel_error` lit (4× MSAA) with fat borders on and off, and the crack
@@ -540,68 +562,134 @@ pub fn border_shading(
     view: &View,
     pixel_error: f64,
 ) -> Result<(BorderShading, [image::RgbaImage; 3]), RenderError> {
-    let lit = |fat_borders| RenderOptions {
+    let lit = |fat_borders, msaa| RenderOptions {
         shading: Shading::Lit,
         fat_borders,
-        msaa: 4,
+        msaa,
         ids: true,
+        depth: msaa == 1,
         ..RenderOptions::default()
     };
     let (ref_meshes, _) = super::crack::reference_meshes(scene, view, pixel_error);
     let ref_gpu = renderer.upload(&ref_meshes);
-    let reference = renderer.render(&ref_gpu, view, &lit(FatBorders::Off))?;
+    let reference = renderer.render(&ref_gpu, view, &lit(FatBorders::Off, 4))?;
+    let reference1 = renderer.render(&ref_gpu, view, &lit(FatBorders::Off, 1))?;
     let meshes = crate::tessellate::tessellate_scene(scene, view, pixel_error);
     let gpu = renderer.upload(&meshes);
-    let on = renderer.render(&gpu, view, &lit(FatBorders::Six))?;
-    let off = renderer.render(&gpu, view, &lit(FatBorders::Off))?;
+    let on = renderer.render(&gpu, view, &lit(FatBorders::Six, 4))?;
+    let on1 = renderer.render(&gpu, view, &lit(FatBorders::Six, 1))?;
+    let off = renderer.render(&gpu, view, &lit(FatBorders::Off, 4))?;
     let ref_img = reference.to_rgba_image();
     let (on_img, off_img) = (on.to_rgba_image(), off.to_rgba_image());
-    let dist = silhouette_distance(&reference);
-    let growth = |f: &Frame| {
-        f.ids.as_ref().map_or(0, |ids| {
-            ids.iter()
-                .zip(&dist)
-                .filter(|(i, _)| **i != 0)
-                .map(|(_, d)| *d)
-                .max()
-                .unwrap_or(0)
-        })
+    let cover: Vec<bool> = match &reference.ids {
+        Some(ids) => ids.iter().map(|&i| i != 0).collect(),
+        None => Vec::new(),
     };
+    let (dist, nearest) = distance_to(&cover, reference.width as usize);
+    let contours = contour_pixels(&reference1, view);
+    let (near_contour, _) = distance_to(&contours, reference.width as usize);
+    let covered = |f: &Frame, k: usize| f.ids.as_ref().is_some_and(|ids| ids[k] != 0);
+    let growth = |f: &Frame| {
+        (0..dist.len())
+            .filter(|&k| covered(f, k))
+            .map(|k| dist[k])
+            .max()
+            .unwrap_or(0)
+    };
+    let band = pixel_error.ceil() as u32 + 1;
+    let counted: Vec<bool> = (0..dist.len())
+        .map(|k| (covered(&reference, k) || dist[k] > band) && near_contour[k] > band)
+        .collect();
+    let interior = |map: &[f32]| {
+        let (sum, n) = map
+            .iter()
+            .zip(&counted)
+            .filter(|(_, c)| **c)
+            .fold((0.0f64, 0usize), |(s, n), (v, _)| (s + *v as f64, n + 1));
+        (sum / n.max(1) as f64) as f32
+    };
+    let (mut fin_pixels, mut fin_sum) = (0usize, 0.0f64);
+    for (k, &near) in nearest.iter().enumerate() {
+        if covered(&on1, k) && !covered(&reference1, k) {
+            let (a, b) = (
+                &on1.color[4 * k..4 * k + 3],
+                &reference1.color[4 * near..4 * near + 3],
+            );
+            let d = (0..3).map(|c| a[c].abs_diff(b[c])).max().unwrap_or(0);
+            fin_pixels += 1;
+            fin_sum += d as f64 / 255.0;
+        }
+    }
     let m = BorderShading {
         on: flip_score(&ref_img, &on_img).0,
         off: flip_score(&ref_img, &off_img).0,
+        interior_on: interior(&flip_map(&ref_img, &on_img)),
+        interior_off: interior(&flip_map(&ref_img, &off_img)),
         growth_on_px: growth(&on),
         growth_off_px: growth(&off),
+        fin_pixels,
+        fin_contrast: (fin_sum / fin_pixels.max(1) as f64) as f32,
     };
     Ok((m, [ref_img, on_img, off_img]))
 }
 
-/// Chebyshev distance (px) of every pixel to the nearest pixel covered in `frame.ids`
-/// (two-pass chamfer; 0 on covered pixels).
-fn silhouette_distance(frame: &Frame) -> Vec<u32> {
+/// Pixels on a silhouette or an occluding contour of `frame` (rendered with depth): covered
+/// pixels next to an uncovered one, or next to one whose depth differs by more than
+/// `crack::MAX_SLOPE` pixel sizes.
+fn contour_pixels(frame: &Frame, view: &View) -> Vec<bool> {
     let (w, h) = (frame.width as usize, frame.height as usize);
-    let big = (w + h) as u32;
-    let mut d: Vec<u32> = match &frame.ids {
-        Some(ids) => ids.iter().map(|&i| if i != 0 { 0 } else { big }).collect(),
-        None => return vec![0; w * h],
+    let Some(depth) = &frame.depth else {
+        return vec![false; w * h];
     };
+    let mut out = vec![false; w * h];
+    for y in 0..h {
+        for x in 0..w {
+            let z = depth[y * w + x];
+            if !z.is_finite() {
+                continue;
+            }
+            let jump = |j: usize| {
+                let zj = depth[j];
+                !zj.is_finite()
+                    || ((z - zj).abs() as f64)
+                        > super::crack::MAX_SLOPE * view.pixel_size_at(z.max(zj) as f64)
+            };
+            out[y * w + x] = (x > 0 && jump(y * w + x - 1))
+                || (x + 1 < w && jump(y * w + x + 1))
+                || (y > 0 && jump((y - 1) * w + x))
+                || (y + 1 < h && jump((y + 1) * w + x));
+        }
+    }
+    out
+}
+
+/// Chebyshev distance (px) of every pixel to the nearest `true` pixel of `mask` (rows of
+/// `w`), and that pixel's index (two-pass chamfer; 0 and itself on `true` pixels).
+fn distance_to(mask: &[bool], w: usize) -> (Vec<u32>, Vec<usize>) {
+    let n = mask.len();
+    let h = n / w.max(1);
+    let big = (w + h) as u32;
+    let mut d: Vec<u32> = mask.iter().map(|&m| if m { 0 } else { big }).collect();
+    let mut near: Vec<usize> = (0..n).collect();
     let neighbours: [(isize, isize); 4] = [(-1, 0), (-1, -1), (0, -1), (1, -1)];
     for pass in 0..2 {
-        for k in 0..w * h {
-            let k = if pass == 0 { k } else { w * h - 1 - k };
+        for k in 0..n {
+            let k = if pass == 0 { k } else { n - 1 - k };
             let (x, y) = ((k % w) as isize, (k / w) as isize);
-            let mut v = d[k];
             for (dx, dy) in neighbours {
                 let (dx, dy) = if pass == 0 { (dx, dy) } else { (-dx, -dy) };
                 let (xx, yy) = (x + dx, y + dy);
                 if xx >= 0 && yy >= 0 && (xx as usize) < w && (yy as usize) < h {
-                    v = v.min(d[yy as usize * w + xx as usize] + 1);
+                    let j = yy as usize * w + xx as usize;
+                    if d[j] + 1 < d[k] {
+                        d[k] = d[j] + 1;
+                        near[k] = near[j];
+                    }
                 }
             }
-            d[k] = v;
         }
     }
-    d
+    (d, near)
 }
 
 #[cfg(test)]
