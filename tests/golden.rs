@@ -302,3 +302,68 @@ fn id_golden_fails_for_every_mutation() {
     }
     assert!(missed.is_empty(), "the ID golden passes with: {missed:?}");
 }
+
+/// The GPU's patch IDs against an independent reference: `check::raster`, a CPU z-buffer
+/// rasterizer sharing no code with the GPU path, drawing the crack check's watertight
+/// reference meshes. The same meshes agree up to edge-rule pixels; the tessellated teapot
+/// with fat borders agrees everywhere more than ⌈γ⌉ + 1 px from an ID boundary, and stops
+/// agreeing when a patch is left out.
+#[test]
+fn gpu_ids_match_a_cpu_rasterizer() {
+    use patchwork::check::crack::reference_meshes;
+    use patchwork::check::raster::{differing_away_from_boundaries, id_image};
+    let scene = common::teapot();
+    let mut renderer = common::renderer();
+    for dir in [None, Some(DVec3::new(0.0, -1.0, 0.15))] {
+        let v = golden_view(&scene, dir);
+        let gamma = view::DEFAULT_PIXEL_ERROR;
+        let (reference, _) = reference_meshes(&scene, &v, gamma);
+        let cpu = id_image(&reference, &v);
+        let same = ids_of(&mut renderer, &reference, &v, FatBorders::Off);
+        let edge = cpu
+            .ids
+            .iter()
+            .zip(&same.ids)
+            .filter(|(a, b)| a != b)
+            .count();
+        let away = differing_away_from_boundaries(&cpu, &same, 1);
+        eprintln!("{dir:?}: same meshes: {edge} pixels differ, {away} away from ID boundaries");
+        assert_eq!(away, 0, "{dir:?}: same meshes, GPU vs CPU");
+        assert!(
+            edge * 500 <= cpu.ids.len(),
+            "{dir:?}: {edge} edge pixels differ"
+        );
+        let band = gamma.ceil() as u32 + 1;
+        let meshes = tessellate_scene(&scene, &v, gamma);
+        let gpu = ids_of(&mut renderer, &meshes, &v, FatBorders::Six);
+        let away = differing_away_from_boundaries(&cpu, &gpu, band);
+        eprintln!(
+            "{dir:?}: tessellated, fat borders: {away} pixels differ > {band} px from ID boundaries"
+        );
+        assert_eq!(away, 0, "{dir:?}: tessellated teapot vs CPU reference");
+        // The comparison can fail: leave out the largest visible patch.
+        let f = cpu.footprints();
+        let largest = meshes
+            .iter()
+            .max_by_key(|m| {
+                f.get(m.patch_id as usize + 1)
+                    .copied()
+                    .flatten()
+                    .map_or(0, |f| f.pixels)
+            })
+            .map(|m| m.patch_id)
+            .expect("patches");
+        let rest: Vec<PatchMesh> = meshes
+            .iter()
+            .filter(|m| m.patch_id != largest)
+            .cloned()
+            .collect();
+        let missing = differing_away_from_boundaries(
+            &cpu,
+            &ids_of(&mut renderer, &rest, &v, FatBorders::Six),
+            band,
+        );
+        eprintln!("{dir:?}: patch {largest} left out: {missing} pixels differ");
+        assert!(missing > 100, "{dir:?}: {missing}");
+    }
+}
