@@ -367,3 +367,72 @@ fn gpu_ids_match_a_cpu_rasterizer() {
         assert!(missing > 100, "{dir:?}: {missing}");
     }
 }
+
+/// The as1 assembly's ID golden fails with any visible placed part (part + placement)
+/// covering ≥ 0.05 % of the image left out: the FLIP golden passed with 7 of its 11 visible
+/// parts removed one at a time.
+#[test]
+fn as1_id_golden_fails_without_any_visible_part() {
+    let scene = common::load("as1-oc-214.stp");
+    let v = golden_view(&scene, None);
+    let t = IdThresholds::default();
+    let path = common::root().join("golden").join("step-as1-ids.png");
+    let golden = match read_id_golden(&path) {
+        Ok(g) => g,
+        Err(e @ GoldenError::Missing(_)) if patchwork::check::golden::update_requested() => {
+            eprintln!("{e}: written by step_as1_ids");
+            return;
+        }
+        Err(e) => panic!("{e}"),
+    };
+    let mut renderer = common::renderer();
+    let meshes = tessellate_scene(&scene, &v, view::DEFAULT_PIXEL_ERROR);
+    let footprints = golden.footprints();
+    let covers = |id: u32| {
+        footprints
+            .get(id as usize + 1)
+            .copied()
+            .flatten()
+            .map_or(0, |f| f.pixels)
+    };
+    // Placed parts: patches grouped by part and placement.
+    let key = |id: u32| {
+        let p = &scene.patches[id as usize];
+        (p.part, p.transform.to_cols_array().map(f64::to_bits))
+    };
+    let mut groups: Vec<((u32, [u64; 16]), usize)> = Vec::new();
+    for m in &meshes {
+        let k = key(m.patch_id);
+        match groups.iter_mut().find(|g| g.0 == k) {
+            Some(g) => g.1 += covers(m.patch_id),
+            None => groups.push((k, covers(m.patch_id))),
+        }
+    }
+    let min = (golden.ids.len() as f64 * 0.0005).ceil() as usize;
+    let visible: Vec<_> = groups.iter().filter(|g| g.1 >= min).collect();
+    assert!(
+        visible.len() >= 10,
+        "{} visible placed parts",
+        visible.len()
+    );
+    let mut missed = Vec::new();
+    for (k, pixels) in visible {
+        let rest: Vec<PatchMesh> = meshes
+            .iter()
+            .filter(|m| key(m.patch_id) != *k)
+            .cloned()
+            .collect();
+        let c = compare_ids(
+            &golden,
+            &ids_of(&mut renderer, &rest, &v, FatBorders::Six),
+            &t,
+        );
+        if !judged(&format!("as1 part {} ({pixels} px) removed", k.0), &c, &t) {
+            missed.push(k.0);
+        }
+    }
+    assert!(
+        missed.is_empty(),
+        "the ID golden passes without parts {missed:?}"
+    );
+}
