@@ -70,6 +70,10 @@ fn vs_border(
     return out;
 }
 
+// How much a fat border's lateral direction weighs against n·v when choosing the lit side
+// (only surfaces within asin(CONTOUR_BIAS) ≈ 14° of grazing are affected).
+const CONTOUR_BIAS: f32 = 0.25;
+
 fn id_color(id: u32) -> vec3<f32> {
     let h = fract(f32(id) * 0.61803398875 + 0.13);
     let k = vec3<f32>(5.0, 3.0, 1.0);
@@ -87,10 +91,18 @@ fn fs_color(in: VsOut) -> @location(0) vec4<f32> {
     if (mode == 2u) {
         return vec4<f32>(id_color(in.patch_id), 1.0);
     }
-    // Two-sided lighting: CAD patches are not consistently oriented.
+    // Two-sided lighting: CAD patches are not consistently oriented, so the side facing the
+    // viewer is lit. A fat-border fragment is shaded as the surface it extends: with its
+    // border vertex's normal and `v` from that vertex. Near a contour (n ⟂ v) the sign of n·v
+    // at the border vertex is noise, and flipping there would swap the lit and the dark side
+    // of the fin that sticks out of the silhouette; the surface that shows next to that fin
+    // is the sheet facing the viewer, whose normal points outwards, the way the fin extends.
+    // So the fin's lateral offset (zero on surfaces) breaks the tie near contours.
     let v = normalize(globals.eye.xyz - in.world);
     var n = normalize(in.normal);
-    if (dot(n, v) < 0.0) {
+    let off = in.actual - in.world;
+    let side = fb_normalize_or(off - dot(off, v) * v, vec3<f32>(0.0));
+    if (dot(n, v) + CONTOUR_BIAS * dot(n, side) < 0.0) {
         n = -n;
     }
     let l = globals.light.xyz;
