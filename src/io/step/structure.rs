@@ -1172,25 +1172,40 @@ fn context_length_mm(file: &P21File, ctx: u64) -> Option<f64> {
         .find_map(|u| unit_mm(file, u, 0))
 }
 
+/// What a unit measures: its SI name, the record that marks a conversion-based unit of that
+/// kind, and what one SI unit is in the scale wanted.
+type UnitKind = (&'static str, &'static str, f64);
+/// Lengths in millimetres.
+const LENGTH_MM: UnitKind = ("METRE", "LENGTH_UNIT", 1000.0);
+/// Plane angles in radians.
+const ANGLE_RAD: UnitKind = ("RADIAN", "PLANE_ANGLE_UNIT", 1.0);
+
 /// Millimetres in length unit `id` (`None` if it is not a length unit).
 fn unit_mm(file: &P21File, id: u64, depth: usize) -> Option<f64> {
+    unit_value(file, id, LENGTH_MM, depth)
+}
+
+/// One unit `id` of `kind` in `kind`'s scale (`None` if it is not such a unit): an `SI_UNIT`
+/// with its prefix, or a `CONVERSION_BASED_UNIT` through its measure.
+fn unit_value(file: &P21File, id: u64, kind: UnitKind, depth: usize) -> Option<f64> {
+    let (si_name, marker, si_scale) = kind;
     if depth > 8 {
         return None;
     }
     let e = file.get(id)?;
-    let mm = if let Some(si) = e.part("SI_UNIT") {
+    let value = if let Some(si) = e.part("SI_UNIT") {
         // Complex form SI_UNIT(prefix, name); simple form SI_UNIT(dimensions, prefix, name).
         let n = si.args.len();
-        if n < 2 || si.args.get(n - 1)?.as_enum()? != "METRE" {
+        if n < 2 || si.args.get(n - 1)?.as_enum()? != si_name {
             return None;
         }
         let prefix = match si.args.get(n - 2)?.as_enum() {
             None => 1.0,
             Some(p) => si_prefix(p)?,
         };
-        1000.0 * prefix
+        si_scale * prefix
     } else if let Some(cbu) = e.part("CONVERSION_BASED_UNIT") {
-        if !e.has("LENGTH_UNIT") {
+        if !e.has(marker) {
             return None;
         }
         let factor = file.get(cbu.ref_at(1)?)?;
@@ -1198,11 +1213,11 @@ fn unit_mm(file: &P21File, id: u64, depth: usize) -> Option<f64> {
             .parts
             .iter()
             .find(|r| r.f64_at(0).is_some() && r.ref_at(1).is_some())?;
-        measure.f64_at(0)? * unit_mm(file, measure.ref_at(1)?, depth + 1)?
+        measure.f64_at(0)? * unit_value(file, measure.ref_at(1)?, kind, depth + 1)?
     } else {
         return None;
     };
-    (mm.is_finite() && mm > 0.0).then_some(mm)
+    (value.is_finite() && value > 0.0).then_some(value)
 }
 
 /// Radians in the plane-angle unit of the first context that names one.
@@ -1212,38 +1227,7 @@ fn plane_angle_unit(file: &P21File) -> Option<f64> {
         .filter_map(|e| e.part("GLOBAL_UNIT_ASSIGNED_CONTEXT"))
         .filter_map(|r| r.list_at(0))
         .flat_map(|units| units.iter().filter_map(Param::as_ref))
-        .find_map(|u| unit_rad(file, u, 0))
-}
-
-/// Radians in plane-angle unit `id` (`None` if it is not a plane-angle unit).
-fn unit_rad(file: &P21File, id: u64, depth: usize) -> Option<f64> {
-    if depth > 8 {
-        return None;
-    }
-    let e = file.get(id)?;
-    let rad = if let Some(si) = e.part("SI_UNIT") {
-        let n = si.args.len();
-        if n < 2 || si.args.get(n - 1)?.as_enum()? != "RADIAN" {
-            return None;
-        }
-        match si.args.get(n - 2)?.as_enum() {
-            None => 1.0,
-            Some(p) => si_prefix(p)?,
-        }
-    } else if let Some(cbu) = e.part("CONVERSION_BASED_UNIT") {
-        if !e.has("PLANE_ANGLE_UNIT") {
-            return None;
-        }
-        let factor = file.get(cbu.ref_at(1)?)?;
-        let measure = factor
-            .parts
-            .iter()
-            .find(|r| r.f64_at(0).is_some() && r.ref_at(1).is_some())?;
-        measure.f64_at(0)? * unit_rad(file, measure.ref_at(1)?, depth + 1)?
-    } else {
-        return None;
-    };
-    (rad.is_finite() && rad > 0.0).then_some(rad)
+        .find_map(|u| unit_value(file, u, ANGLE_RAD, 0))
 }
 
 /// The largest distance uncertainty any context declares (file length units).
