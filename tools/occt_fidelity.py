@@ -825,7 +825,7 @@ def self_test(args):
         ours = roundtrip(inst)
         r = evaluate(occt, ours, rel, T, diag, fine, rng, args.max_samples, 4)
         kinds = sorted({f.split(":")[0] for f in r["fail"]})
-        ok = set(expect) <= set(kinds) and not (set(forbid) & set(kinds)) and (expect or not kinds)
+        ok = bool(set(expect) <= set(kinds) and not (set(forbid) & set(kinds)) and (expect or not kinds))
         log("  %-42s a/T %.2f  b/T %.2f  inst %d/%d  failures %s  must %s  must not %s  %s" % (
             name, r.get("a_over_T", np.nan), r.get("b_over_T", np.nan), r["inst_ours"], r["inst_occt"],
             kinds or "none", expect or "none", list(forbid) or "-", "ok" if ok else "WRONG"))
