@@ -681,7 +681,7 @@ def our_patches(pw, path, plain):
     return None
 
 
-VERIFY = 300  # exceeding samples per direction checked on the exact B-rep
+VERIFY = 1000  # exceeding samples per direction checked on the exact B-rep
 
 
 def verify_exact(occt, occt_fine, P, d, idx):
