@@ -161,3 +161,27 @@ fn seams_are_not_boundaries() {
     let off = measure(&face, &grown, &tris, eps).expect("measured");
     assert!(off.ratio() > 1.3, "{off:?}");
 }
+
+/// A hole a whole period away from its outer loop in parameter space (linkrods face #291: a
+/// cylinder whose outer loop runs over u ∈ −2π..0 and a slot at u ≈ π): the tessellator must
+/// still cut it, not fill it; the measure sees the difference.
+#[test]
+fn a_hole_a_period_away_is_cut() {
+    let scene = patchwork::io::load(&common::root().join("models/corpus/linkrods.step.gz"))
+        .expect("linkrods loads");
+    let p = scene
+        .patches
+        .iter()
+        .find(|p| matches!(&p.surface, PatchSurface::Trimmed(f) if f.id == 291))
+        .expect("face #291");
+    let PatchSurface::Trimmed(face) = &p.surface else {
+        unreachable!("matched above")
+    };
+    assert_eq!(face.loops.len(), 2, "outer loop and slot");
+    let view = framing(&scene);
+    let eps = view.eps_obj(&p.bounds, DEFAULT_PIXEL_ERROR);
+    let mut m = PatchMesh::default();
+    Tessellators::new().patch(p, eps, &mut m);
+    let f = measure_placed(face, &p.transform, &m, eps).expect("measured");
+    assert!(f.outside == 0 && f.ratio() <= 1.0, "{f:?}");
+}

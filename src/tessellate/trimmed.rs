@@ -143,6 +143,7 @@ impl TrimmedTessellator {
         }
         let mut loops = std::mem::take(&mut self.loops);
         close_wrapping_loops(face, &mut loops)?;
+        align_loops(face, &mut loops);
         for lp in loops.iter_mut() {
             refine_border(face, lp, eps * 0.5, shared_borders);
             fix_poles(s, lp);
@@ -557,6 +558,41 @@ fn winding(lp: &[BPoint], pu: Option<f64>, pv: Option<f64>) -> (i64, i64) {
         _ => 0,
     };
     (w(d.x, pu), w(d.y, pv))
+}
+
+/// Shifts each loop by whole periods so that it lies next to the widest loop (the outer one).
+/// Loops are unwrapped one by one from their own first point, so on a periodic surface a hole
+/// can land a period away from the outer loop's window (an outer loop over u ∈ −2π..0 and a
+/// slot at u ≈ π): the hole would then lie outside the domain and be filled.
+fn align_loops(face: &TrimmedFace, loops: &mut [Vec<BPoint>]) {
+    let (pu, pv) = face.periods();
+    if pu.is_none() && pv.is_none() {
+        return;
+    }
+    let boxes: Vec<(DVec2, DVec2)> = loops
+        .iter()
+        .map(|lp| uv_box(std::slice::from_ref(lp)))
+        .collect();
+    let Some(outer) = boxes
+        .iter()
+        .max_by(|a, b| (a.1 - a.0).length().total_cmp(&(b.1 - b.0).length()))
+        .map(|(lo, hi)| (*lo + *hi) * 0.5)
+    else {
+        return;
+    };
+    for (lp, (lo, hi)) in loops.iter_mut().zip(boxes) {
+        let c = (lo + hi) * 0.5;
+        let shift = |p: Option<f64>, d: f64| match p {
+            Some(p) if p > 0.0 => (d / p).round() * p,
+            _ => 0.0,
+        };
+        let delta = DVec2::new(shift(pu, outer.x - c.x), shift(pv, outer.y - c.y));
+        if delta != DVec2::ZERO {
+            for b in lp.iter_mut() {
+                b.uv += delta;
+            }
+        }
+    }
 }
 
 /// Joins or closes loops that run around a periodic surface, so that every loop is a closed
