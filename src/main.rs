@@ -876,7 +876,7 @@ fn cmd_stats(args: &StatsArgs) -> Result<(), CliError> {
         "worst error/eps   {:.3} (the tessellator's own samples)",
         s.worst_error_ratio
     );
-    let faces = patchwork::check::fidelity::measure_scene(&scene, &view, args.camera.pixel_error);
+    let faces = patchwork::check::fidelity::measure_meshes(&scene, &meshes);
     if !faces.is_empty() {
         let samples: usize = faces.iter().map(|f| f.1.samples).sum();
         let outside: usize = faces.iter().map(|f| f.1.outside).sum();

@@ -83,27 +83,34 @@ pub fn surface_kind(s: &TruckSurface) -> &'static str {
     }
 }
 
-/// Tessellates every trimmed patch of `scene` for `view` at `pixel_error` as the renderer
-/// does, and measures each against its face (on rayon). Sorted worst first.
+/// Tessellates every patch of `scene` for `view` at `pixel_error` as the renderer does and
+/// measures each trimmed one against its face. Sorted worst first, with the patch id.
 pub fn measure_scene(
     scene: &crate::model::Scene,
     view: &crate::view::View,
     pixel_error: f64,
 ) -> Vec<(u32, FaceFidelity)> {
+    let meshes = crate::tessellate::tessellate_scene(scene, view, pixel_error);
+    measure_meshes(scene, &meshes)
+}
+
+/// Measures `meshes` (one per patch of `scene`, in order, in world coordinates, each built
+/// for its `eps_target`) against their trimmed faces, on rayon. Sorted worst first.
+pub fn measure_meshes(
+    scene: &crate::model::Scene,
+    meshes: &[PatchMesh],
+) -> Vec<(u32, FaceFidelity)> {
     use rayon::prelude::*;
     let mut out: Vec<(u32, FaceFidelity)> = scene
         .patches
         .par_iter()
-        .map_init(crate::tessellate::Tessellators::new, |t, p| {
+        .zip(meshes.par_iter())
+        .filter_map(|(p, mesh)| {
             let crate::model::PatchSurface::Trimmed(face) = &p.surface else {
                 return None;
             };
-            let eps = view.eps_obj(&p.bounds, pixel_error);
-            let mut mesh = PatchMesh::default();
-            t.patch(p, eps, &mut mesh);
-            measure_placed(face, &p.transform, &mesh, eps).map(|f| (p.id, f))
+            measure_placed(face, &p.transform, mesh, mesh.eps_target).map(|f| (p.id, f))
         })
-        .flatten()
         .collect();
     out.sort_by(|a, b| b.1.ratio().total_cmp(&a.1.ratio()));
     out
