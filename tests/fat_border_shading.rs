@@ -7,24 +7,11 @@ mod common;
 
 use glam::DVec3;
 use patchwork::check::golden::border_shading;
-use patchwork::model::Scene;
-use patchwork::view::{self, View};
 
 /// Largest mean fin contrast accepted (largest RGB channel difference, 0–1).
 const FIN_CONTRAST: f32 = 0.18;
 /// Largest ratio of FLIP with fat borders to FLIP without, away from contours.
 const INTERIOR_RATIO: f32 = 1.4;
-
-/// The golden views' camera (as `tests/golden.rs`).
-fn golden_view(scene: &Scene, dir: Option<DVec3>) -> View {
-    let up = scene.up.vector();
-    let fov = view::DEFAULT_FOV_Y_DEG.to_radians();
-    let size = (400, 300);
-    match dir {
-        None => View::framing(&scene.bounds, up, fov, size),
-        Some(d) => View::framing_from(&scene.bounds, up, d, fov, size),
-    }
-}
 
 /// Fat borders shaded as the surface they extend, at γ = 1, 2, 4, 8 px against the watertight
 /// reference:
@@ -46,7 +33,7 @@ fn fat_borders_are_no_worse_than_the_cracks_they_hide() {
         .into_iter()
         .enumerate()
     {
-        let v = golden_view(&scene, dir);
+        let v = common::golden_view(&scene, dir);
         for gamma in [1.0, 2.0, 4.0, 8.0] {
             let (m, images) = border_shading(&mut renderer, &scene, &v, gamma).expect("render");
             eprintln!(

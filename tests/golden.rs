@@ -110,14 +110,16 @@ fn step_models() {
     }
 }
 
-/// The golden views' camera: framing the scene from `dir` (default three-quarter view).
-fn golden_view(scene: &Scene, dir: Option<DVec3>) -> View {
-    let up = scene.up.vector();
-    let fov = view::DEFAULT_FOV_Y_DEG.to_radians();
-    let size = (400, 300);
-    match dir {
-        None => View::framing(&scene.bounds, up, fov, size),
-        Some(d) => View::framing_from(&scene.bounds, up, d, fov, size),
+/// The ID golden at `path`; `None` (skip) when it is missing and `GOLDEN_UPDATE=1` asks test
+/// `writer` to create it.
+fn id_golden_or_skip(path: &std::path::Path, writer: &str) -> Option<IdImage> {
+    match read_id_golden(path) {
+        Ok(g) => Some(g),
+        Err(e @ GoldenError::Missing(_)) if patchwork::check::golden::update_requested() => {
+            eprintln!("{e}: written by {writer}");
+            None
+        }
+        Err(e) => panic!("{e}"),
     }
 }
 
@@ -140,7 +142,7 @@ fn ids_of(
 }
 
 fn id_golden(scene: Scene, name: &str, dir: Option<DVec3>) {
-    let v = golden_view(&scene, dir);
+    let v = common::golden_view(&scene, dir);
     let meshes = tessellate_scene(&scene, &v, view::DEFAULT_PIXEL_ERROR);
     let ids = ids_of(&mut common::renderer(), &meshes, &v, FatBorders::Six);
     let path = common::root()
@@ -210,16 +212,11 @@ fn judged(name: &str, c: &IdComparison, t: &IdThresholds) -> bool {
 #[test]
 fn id_golden_fails_for_every_mutation() {
     let scene = common::teapot();
-    let v = golden_view(&scene, None);
+    let v = common::golden_view(&scene, None);
     let t = IdThresholds::default();
     let path = common::root().join("golden").join("teapot-default-ids.png");
-    let golden = match read_id_golden(&path) {
-        Ok(g) => g,
-        Err(e @ GoldenError::Missing(_)) if patchwork::check::golden::update_requested() => {
-            eprintln!("{e}: written by teapot_ids_default_view");
-            return;
-        }
-        Err(e) => panic!("{e}"),
+    let Some(golden) = id_golden_or_skip(&path, "teapot_ids_default_view") else {
+        return;
     };
     let mut renderer = common::renderer();
     let meshes = tessellate_scene(&scene, &v, view::DEFAULT_PIXEL_ERROR);
@@ -315,7 +312,7 @@ fn gpu_ids_match_a_cpu_rasterizer() {
     let scene = common::teapot();
     let mut renderer = common::renderer();
     for dir in [None, Some(DVec3::new(0.0, -1.0, 0.15))] {
-        let v = golden_view(&scene, dir);
+        let v = common::golden_view(&scene, dir);
         let gamma = view::DEFAULT_PIXEL_ERROR;
         let (reference, _) = reference_meshes(&scene, &v, gamma);
         let cpu = id_image(&reference, &v);
@@ -374,16 +371,11 @@ fn gpu_ids_match_a_cpu_rasterizer() {
 #[test]
 fn as1_id_golden_fails_without_any_visible_part() {
     let scene = common::load("as1-oc-214.stp");
-    let v = golden_view(&scene, None);
+    let v = common::golden_view(&scene, None);
     let t = IdThresholds::default();
     let path = common::root().join("golden").join("step-as1-ids.png");
-    let golden = match read_id_golden(&path) {
-        Ok(g) => g,
-        Err(e @ GoldenError::Missing(_)) if patchwork::check::golden::update_requested() => {
-            eprintln!("{e}: written by step_as1_ids");
-            return;
-        }
-        Err(e) => panic!("{e}"),
+    let Some(golden) = id_golden_or_skip(&path, "step_as1_ids") else {
+        return;
     };
     let mut renderer = common::renderer();
     let meshes = tessellate_scene(&scene, &v, view::DEFAULT_PIXEL_ERROR);

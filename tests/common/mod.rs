@@ -3,8 +3,10 @@
 
 use std::path::PathBuf;
 
+use glam::DVec3;
 use patchwork::model::Scene;
 use patchwork::render::Renderer;
+use patchwork::view::{self, View};
 
 /// The repository root.
 pub fn root() -> PathBuf {
@@ -36,4 +38,16 @@ pub fn scratch(name: &str) -> PathBuf {
     let dir = root().join("target").join("test-output").join(name);
     std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display()));
     dir
+}
+
+/// The golden views' camera: 400×300, framing the scene from `dir`
+/// (default three-quarter view).
+pub fn golden_view(scene: &Scene, dir: Option<DVec3>) -> View {
+    let up = scene.up.vector();
+    let fov = view::DEFAULT_FOV_Y_DEG.to_radians();
+    let size = (400, 300);
+    match dir {
+        None => View::framing(&scene.bounds, up, fov, size),
+        Some(d) => View::framing_from(&scene.bounds, up, d, fov, size),
+    }
 }
