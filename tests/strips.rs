@@ -125,7 +125,11 @@ proptest! {
         let opts = TunnelOptions { repair_len, extra, ..Default::default() };
         let mut cs = CutStrips::new(&hier, opts);
         let mut cut = Vec::new();
-        let cache = patchwork::model::mesh::CutStripsCache::default();
+        let store = patchwork::strips::StripStore::new();
+        let patch = std::sync::Arc::new(patchwork::model::mesh::MeshPatch {
+            hierarchy: hier.clone(),
+            ..Default::default()
+        });
         let mut drawn = [Vec::new(), Vec::new()];
         for m in moves {
             let target = (cs.applied() as i64 + m as i64).clamp(1, hier.order.len() as i64) as usize;
@@ -140,10 +144,10 @@ proptest! {
             }
             let idx = cs.strips.to_indices();
             prop_assert!(same_triangles(&decode(&idx.indices), &cut), "after moving to {}", target);
-            // What the renderer draws for `--primitives repair` and `mts`: the patch's cache
+            // What the renderer draws for `--primitives repair` and `mts`: its strip store
             // following the same cuts.
             for (k, mts) in [false, true].into_iter().enumerate() {
-                cache.cut_strips(&hier, target, mts, &mut drawn[k]);
+                store.cut(&patch, target, mts, &mut drawn[k]);
                 prop_assert!(same_triangles(&decode(&drawn[k]), &cut), "mts {} at {}", mts, target);
             }
         }

@@ -33,6 +33,7 @@ use std::time::{Duration, Instant};
 use rayon::prelude::*;
 
 use crate::model::Scene;
+use crate::mt::CutState;
 use crate::tessellate::{PatchMesh, Tessellators};
 use crate::view::View;
 
@@ -125,6 +126,9 @@ struct PatchLod {
     in_frustum: bool,
     /// Showed in the patch-ID buffer of the last frame drawn.
     visible: bool,
+    /// A mesh patch's last cut of its hierarchy, moved from there to the next level (Holst
+    /// §3): per-view state, kept here rather than in the scene.
+    cut: Option<CutState>,
 }
 
 impl PatchLod {
@@ -188,7 +192,8 @@ impl FrameLoop {
                 let wanted = view.eps_obj(&patch.bounds, options.pixel_error);
                 let level = levels.level_for(wanted);
                 let mut mesh = PatchMesh::default();
-                t.patch(patch, levels.eps(level), &mut mesh);
+                let mut cut = None;
+                t.patch_from(patch, levels.eps(level), &mut cut, &mut mesh);
                 PatchLod {
                     level,
                     mesh: Arc::new(mesh),
@@ -196,6 +201,7 @@ impl FrameLoop {
                     wanted,
                     in_frustum: view.sees_sphere(&patch.bounds),
                     visible: true,
+                    cut,
                 }
             })
             .collect();
@@ -296,14 +302,22 @@ impl FrameLoop {
             let end = (next + batch.min(4 * threads)).min(todo.len());
             let jobs = &todo[next..end];
             let t0 = Instant::now();
+            let mut cuts: Vec<Option<CutState>> = jobs
+                .iter()
+                .map(|&(i, _)| self.patches[i].cut.take())
+                .collect();
             let results: Vec<PatchMesh> = jobs
                 .par_iter()
-                .map_init(Tessellators::new, |t, &(i, level)| {
+                .zip(cuts.par_iter_mut())
+                .map_init(Tessellators::new, |t, (&(i, level), cut)| {
                     let mut mesh = PatchMesh::default();
-                    t.patch(&scene.patches[i], levels.eps(level), &mut mesh);
+                    t.patch_from(&scene.patches[i], levels.eps(level), cut, &mut mesh);
                     mesh
                 })
                 .collect();
+            for (&(i, _), cut) in jobs.iter().zip(cuts) {
+                self.patches[i].cut = cut;
+            }
             let dt = t0.elapsed().as_secs_f64();
             // Cost per patch on one worker: the batch ran on min(jobs, threads) workers.
             let per = dt * (jobs.len().min(threads) as f64) / jobs.len() as f64;

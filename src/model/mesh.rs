@@ -67,75 +67,6 @@ pub struct MeshPatch {
     /// The patch's multi-resolution hierarchy (empty until built, see
     /// [`MeshPatch::build_hierarchy`]).
     pub hierarchy: crate::mt::MtHierarchy,
-    /// The cut drawn last, moved from there to the next ε (frame coherence).
-    pub cut: CutCache,
-    /// Strips that follow the cut (`--primitives mts` / `repair`), built on first use.
-    pub strips: CutStripsCache,
-}
-
-/// The last cut of a patch's hierarchy. A cache: clones start empty and it never makes two
-/// patches differ.
-#[derive(Debug, Default)]
-pub struct CutCache(pub std::sync::Mutex<Option<crate::mt::CutState>>);
-
-impl Clone for CutCache {
-    fn clone(&self) -> Self {
-        Self::default()
-    }
-}
-
-impl PartialEq for CutCache {
-    fn eq(&self, _: &Self) -> bool {
-        true
-    }
-}
-
-/// Strips of a patch's hierarchy that follow its cut, built on first use: Belmonte et al.'s
-/// multiresolution strips ([`crate::strips::mts`]) and Stewart's strips repaired by
-/// tunneling ([`crate::strips::tunnel::CutStrips`]). A cache like [`CutCache`].
-#[derive(Debug, Default)]
-pub struct CutStripsCache {
-    mts: std::sync::Mutex<Option<crate::strips::mts::MultiresStrips>>,
-    repaired: std::sync::Mutex<Option<crate::strips::tunnel::CutStrips>>,
-}
-
-impl Clone for CutStripsCache {
-    fn clone(&self) -> Self {
-        Self::default()
-    }
-}
-
-impl PartialEq for CutStripsCache {
-    fn eq(&self, _: &Self) -> bool {
-        true
-    }
-}
-
-impl CutStripsCache {
-    /// The strips (joined by [`crate::strips::RESTART`]) of the cut of `h` after `applied`
-    /// nodes of its order, into `out`: extracted from the multiresolution strips (`mts`,
-    /// coherent with the last extraction) or repaired from the last cut by tunneling.
-    pub fn cut_strips(
-        &self,
-        h: &crate::mt::MtHierarchy,
-        applied: usize,
-        mts: bool,
-        out: &mut Vec<u32>,
-    ) {
-        use crate::strips::{mts::MultiresStrips, tunnel};
-        let opts = tunnel::TunnelOptions::default();
-        out.clear();
-        if mts {
-            let mut slot = self.mts.lock().unwrap_or_else(|e| e.into_inner());
-            let s = slot.get_or_insert_with(|| MultiresStrips::build(h, &opts));
-            s.extract(applied, true, out);
-        } else {
-            let mut slot = self.repaired.lock().unwrap_or_else(|e| e.into_inner());
-            let s = slot.get_or_insert_with(|| tunnel::CutStrips::new(h, opts));
-            s.move_to(h, applied);
-            s.strips.write_indices(out);
-        }
-    }
 }
 
 impl MeshPatch {
@@ -146,8 +77,6 @@ impl MeshPatch {
         if arc_size >= 1.5 {
             self.hierarchy.reduce(arc_size);
         }
-        self.cut = CutCache::default();
-        self.strips = CutStripsCache::default();
     }
 }
 
@@ -317,8 +246,6 @@ pub fn extract(mesh: &TriMesh, normals: &[Vec3], triangles: &[u32]) -> MeshPatch
         source_triangles: triangles.to_vec(),
         source_vertices: sources,
         hierarchy: Default::default(),
-        cut: Default::default(),
-        strips: Default::default(),
     }
 }
 

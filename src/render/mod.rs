@@ -363,6 +363,8 @@ pub struct Renderer {
     targets: HashMap<Target, Targets>,
     /// Static buffers of mesh patches' hierarchies, built on first use.
     statics: Mutex<HashMap<StaticKey, Arc<StaticPatch>>>,
+    /// Strips of uploaded meshes kept between uploads (per-view state: the scene holds none).
+    strips: crate::strips::StripStore,
     /// Draw mesh-patch cuts from static per-patch buffers (default) instead of uploading
     /// their triangles with every new tessellation.
     pub static_arcs: bool,
@@ -500,6 +502,7 @@ impl Renderer {
             pipelines: HashMap::new(),
             targets: HashMap::new(),
             statics: Mutex::new(HashMap::new()),
+            strips: crate::strips::StripStore::new(),
             static_arcs: true,
             primitives: Primitives::default(),
             strip_join: if gpu_backend == wgpu::Backend::Gl {
@@ -529,13 +532,14 @@ impl Renderer {
         let (mut indices, mut strip_indices): (Vec<u32>, Vec<u32>) = Default::default();
         let (mut statics, mut ranges, mut static_triangles) = (Vec::new(), Vec::new(), 0u32);
         let primitives = self.primitives;
+        self.strips.begin_upload();
         // The strips of every uploaded mesh drawn as strips, built (or extracted, or
         // repaired) in parallel.
         let uploaded_strips: Vec<Option<Arc<Vec<u32>>>> = meshes
             .par_iter()
             .map(|m| {
                 (primitives.strips_for(m) && !self.draws_static(m))
-                    .then(|| strips_of(m, primitives))
+                    .then(|| strips_of(&self.strips, m, primitives))
             })
             .collect();
         let mut triangles = 0u32;
@@ -1091,20 +1095,24 @@ fn read_texture(
 
 /// The strips of an uploaded mesh, indices into its own vertices: for a mesh-patch cut with
 /// `auto` / `mts` / `repair`, its hierarchy's multiresolution strips at the cut's level or its
-/// repaired cut strips; otherwise tunneling strips of its triangles (cached with the
-/// tessellation).
-fn strips_of(m: &PatchMesh, primitives: Primitives) -> Arc<Vec<u32>> {
+/// repaired cut strips; otherwise tunneling strips of its triangles (kept in `store` while
+/// the tessellation is drawn).
+fn strips_of(
+    store: &crate::strips::StripStore,
+    m: &PatchMesh,
+    primitives: Primitives,
+) -> Arc<Vec<u32>> {
     match (&m.arcs, primitives) {
         (Some(cut), Primitives::Auto | Primitives::Mts | Primitives::Repair) => {
             let mut out = Vec::new();
-            cut.patch.strips.cut_strips(
-                &cut.patch.hierarchy,
+            store.cut(
+                &cut.patch,
                 cut.applied,
                 primitives != Primitives::Repair,
                 &mut out,
             );
             Arc::new(out)
         }
-        _ => m.strips.get(&m.triangles),
+        _ => store.tessellation(m.patch_id, &m.triangles),
     }
 }

@@ -14,7 +14,10 @@
 //! is unreliable — by zero-area windows ([`join_degenerate`], [`Join`]).
 
 pub mod mts;
+pub mod store;
 pub mod tunnel;
+
+pub use store::StripStore;
 
 use crate::mt::MtHierarchy;
 
@@ -236,44 +239,3 @@ pub fn arc_strips(h: &MtHierarchy, opts: &tunnel::TunnelOptions) -> (StripIndice
     (out, starts)
 }
 
-/// The strips of a tessellation, built on first use and kept with it (a patch's strips are
-/// static while its tessellation lives: Holst's and Stewart's static case). Tessellators reuse
-/// their output meshes, so the cache remembers a fingerprint of the triangles it was built
-/// for and rebuilds when they changed.
-#[derive(Debug, Default)]
-pub struct StripCache(std::sync::Mutex<Option<(u64, std::sync::Arc<Vec<u32>>)>>);
-
-impl Clone for StripCache {
-    fn clone(&self) -> Self {
-        StripCache(std::sync::Mutex::new(
-            self.0.lock().unwrap_or_else(|e| e.into_inner()).clone(),
-        ))
-    }
-}
-
-/// A fingerprint of a triangle list (FNV-1a over the indices).
-fn fingerprint(tris: &[[u32; 3]]) -> u64 {
-    let mut h = 0xcbf2_9ce4_8422_2325u64 ^ tris.len() as u64;
-    for &i in tris.iter().flatten() {
-        h = (h ^ i as u64).wrapping_mul(0x0100_0000_01b3);
-    }
-    h
-}
-
-impl StripCache {
-    /// The strips of `tris` (tunneling with the default options), from the cache when it
-    /// holds them.
-    pub fn get(&self, tris: &[[u32; 3]]) -> std::sync::Arc<Vec<u32>> {
-        let key = fingerprint(tris);
-        let mut slot = self.0.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some((k, s)) = slot.as_ref()
-            && *k == key
-        {
-            return s.clone();
-        }
-        let s =
-            std::sync::Arc::new(tunnel::stripify(tris, &tunnel::TunnelOptions::default()).indices);
-        *slot = Some((key, s.clone()));
-        s
-    }
-}

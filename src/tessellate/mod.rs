@@ -15,6 +15,7 @@ use rayon::prelude::*;
 
 use crate::isolate::isolated;
 use crate::model::{Patch, PatchSurface, Scene};
+use crate::mt::CutState;
 use crate::view::View;
 
 /// What is drawn for one patch: triangles, the closed border loops, and the error achieved.
@@ -44,8 +45,6 @@ pub struct PatchMesh {
     /// hierarchy's triangles, which the renderer draws from index buffers built once per
     /// patch (`triangles` holds the same triangles for CPU work).
     pub arcs: Option<CutRanges>,
-    /// Its triangle strips, built when first drawn with `Primitives::Strips`.
-    pub strips: crate::strips::StripCache,
 }
 
 /// A cut as ranges `[first, count]` of its patch's [`crate::mt::MtHierarchy::triangles`].
@@ -90,6 +89,19 @@ impl Tessellators {
         self.patch_with(patch, eps, false, out)
     }
 
+    /// As [`Tessellators::patch`], for a frame loop: a mesh patch's cut is moved from `cut`
+    /// (the patch's previous cut, kept by the caller: per-view state, not the scene's) to
+    /// `eps`, and left there for the next call (Holst §3, frame coherence).
+    pub fn patch_from(
+        &mut self,
+        patch: &Patch,
+        eps: f64,
+        cut: &mut Option<CutState>,
+        out: &mut PatchMesh,
+    ) {
+        self.dispatch(patch, eps, false, Some(cut), out)
+    }
+
     /// As [`Tessellators::patch`]; `shared_borders` keeps trim polylines to what depends on
     /// the curve and ε alone, so faces tessellated with the same ε share border vertices
     /// (used for watertight references).
@@ -100,6 +112,17 @@ impl Tessellators {
         shared_borders: bool,
         out: &mut PatchMesh,
     ) {
+        self.dispatch(patch, eps, shared_borders, None, out)
+    }
+
+    fn dispatch(
+        &mut self,
+        patch: &Patch,
+        eps: f64,
+        shared_borders: bool,
+        cut: Option<&mut Option<CutState>>,
+        out: &mut PatchMesh,
+    ) {
         out.patch_id = patch.id;
         out.color = patch.color;
         out.failure = None;
@@ -107,7 +130,7 @@ impl Tessellators {
         out.arcs = None;
         match &patch.surface {
             PatchSurface::Bezier(b) => self.bezier.tessellate(b, eps, out),
-            PatchSurface::Mesh(m) => mesh_patch(m, eps, shared_borders, out),
+            PatchSurface::Mesh(m) => mesh_patch(m, eps, shared_borders, cut, out),
             PatchSurface::Trimmed(face) => {
                 let scale = patch.scale().max(1e-300);
                 let local = eps / scale;
@@ -134,11 +157,13 @@ impl Tessellators {
 
 /// A mesh patch: the cut of its MT hierarchy for `eps` (the original triangles with
 /// `original`, as the watertight crack-check reference wants), its border loops and the
-/// achieved error. The cut is moved from the patch's previous one (frame coherence).
+/// achieved error. The cut is moved from `cut` when given (the patch's previous cut, frame
+/// coherence), else from the finest cut.
 fn mesh_patch(
     m: &std::sync::Arc<crate::model::mesh::MeshPatch>,
     eps: f64,
     original: bool,
+    cut: Option<&mut Option<CutState>>,
     out: &mut PatchMesh,
 ) {
     out.positions.clear();
@@ -152,8 +177,8 @@ fn mesh_patch(
         out.error = 0.0;
     } else {
         let h = &m.hierarchy;
-        let mut last = m.cut.0.lock().unwrap_or_else(|e| e.into_inner());
-        let state = last.get_or_insert_with(|| h.finest_cut());
+        let mut fresh = None;
+        let state = cut.unwrap_or(&mut fresh).get_or_insert_with(|| h.finest_cut());
         h.move_cut(state, eps);
         let mut ranges = Vec::new();
         out.error = h.cut_ranges(state, &mut ranges);
