@@ -457,6 +457,8 @@ pub struct ViewResult {
 #[derive(Clone, Debug, Default)]
 pub struct CheckReport {
     pub views: Vec<ViewResult>,
+    /// Failure images that could not be written (the counts stand).
+    pub warnings: Vec<String>,
 }
 
 fn sum_counts<'a>(
@@ -509,6 +511,80 @@ pub fn check_render_options(fat_borders: FatBorders) -> RenderOptions {
     }
 }
 
+/// The crack check of one view — the only one: the watertight reference drawn once, then any
+/// number of drawings of the same view counted against it. Still views (`patchwork check`),
+/// the LOD frame loop and animations (through [`crate::frame::step`]) all use it.
+#[derive(Debug)]
+pub struct Judge {
+    reference: Frame,
+    view: View,
+    pixel_error: f64,
+}
+
+/// One drawing counted by a [`Judge`]: the counts, the image and the crack mask.
+#[derive(Debug)]
+pub struct Verdict {
+    pub counts: CrackCounts,
+    pub actual: Frame,
+    pub mask: image::RgbaImage,
+}
+
+impl Verdict {
+    /// Whether anything is wrong (a crack or growth pixel).
+    pub fn failed(&self) -> bool {
+        self.counts.cracks() > 0 || self.counts.growth > 0
+    }
+
+    /// Writes `{stem}-actual.png` and `{stem}-diff.png` into `dir` (a diagnostic aid).
+    pub fn save(&self, dir: &std::path::Path, stem: &str) -> Result<(), crate::io::png::WriteError> {
+        let actual = self.actual.to_rgba_image();
+        crate::io::png::write_rgba(&dir.join(format!("{stem}-actual.png")), &actual)?;
+        crate::io::png::write_rgba(&dir.join(format!("{stem}-diff.png")), &self.mask)
+    }
+}
+
+impl Judge {
+    /// Draws `reference` (watertight meshes, e.g. [`reference_meshes`] for the view, moved as
+    /// the drawing is) without fat borders; drawings are then judged at `pixel_error`.
+    pub fn new(
+        renderer: &mut Renderer,
+        reference: &[PatchMesh],
+        view: &View,
+        pixel_error: f64,
+    ) -> Result<Judge, CheckError> {
+        let gpu = renderer.upload(reference);
+        let reference = renderer.render(&gpu, view, &check_render_options(FatBorders::Off))?;
+        Ok(Judge {
+            reference,
+            view: view.clone(),
+            pixel_error,
+        })
+    }
+
+    /// Draws `gpu` with fat borders `variant` (flat check colours, depth) and counts crack
+    /// and growth pixels against the reference ([`classify`]).
+    pub fn count(
+        &self,
+        renderer: &mut Renderer,
+        gpu: &crate::render::GpuMeshes,
+        variant: FatBorders,
+    ) -> Result<Verdict, CheckError> {
+        let actual = renderer.render(gpu, &self.view, &check_render_options(variant))?;
+        let (counts, mask) = classify(
+            &self.reference,
+            &actual,
+            &self.view,
+            self.pixel_error,
+            SENTINEL,
+        )?;
+        Ok(Verdict {
+            counts,
+            actual,
+            mask,
+        })
+    }
+}
+
 /// Scales the ε every mesh declares (target and achieved) by `factor`: their fat borders
 /// are then drawn that much narrower; the triangles do not change.
 pub fn narrow_fat_borders(meshes: &mut [PatchMesh], factor: f64) {
@@ -539,12 +615,10 @@ pub fn run_check_with(
     mut on_view: impl FnMut(&ViewResult),
 ) -> Result<CheckReport, CheckError> {
     let mut report = CheckReport::default();
-    let base = check_render_options(FatBorders::Off);
     for index in 0..opts.views {
         let view = random_view(scene, opts.seed, index, opts.size, opts.fov_y);
         let (ref_meshes, grid) = reference_meshes(scene, &view, opts.pixel_error);
-        let ref_gpu = renderer.upload(&ref_meshes);
-        let reference = renderer.render(&ref_gpu, &view, &base)?;
+        let judge = Judge::new(renderer, &ref_meshes, &view, opts.pixel_error)?;
         let mut meshes = if opts.stress {
             super::stress::stress_tessellation(scene, &view, opts.pixel_error)
         } else {
@@ -562,29 +636,18 @@ pub fn run_check_with(
                            variant: FatBorders,
                            tag: &str|
          -> Result<CrackCounts, CheckError> {
-            let frame = renderer.render(
-                gpu,
-                &view,
-                &RenderOptions {
-                    fat_borders: variant,
-                    ..base
-                },
-            )?;
-            let (c, mask) = classify(&reference, &frame, &view, opts.pixel_error, SENTINEL)?;
+            let verdict = judge.count(renderer, gpu, variant)?;
             if let Some(dir) = &opts.save_failures
-                && (c.cracks() > 0 || c.growth > 0)
+                && verdict.failed()
             {
                 let stem = format!("view{index:03}-fb{}{tag}", variant.name());
-                // Failure images are a diagnostic aid; a failure to write them is reported on
-                // stderr but does not hide the counts.
-                for (suffix, img) in [("actual", frame.to_rgba_image()), ("diff", mask)] {
-                    let path = dir.join(format!("{stem}-{suffix}.png"));
-                    if let Err(e) = crate::io::png::write_rgba(&path, &img) {
-                        eprintln!("warning: {e}");
-                    }
+                // Failure images are a diagnostic aid; a failure to write them is reported
+                // with the counts but does not hide them.
+                if let Err(e) = verdict.save(dir, &stem) {
+                    report.warnings.push(e.to_string());
                 }
             }
-            Ok(c)
+            Ok(verdict.counts)
         };
         for &variant in &opts.variants {
             counts.push((variant, measure(&gpu, variant, "")?));
