@@ -10,6 +10,7 @@
 
 pub mod anim;
 pub mod check;
+pub mod frame;
 pub mod geom;
 pub mod io;
 pub mod isolate;

@@ -1,6 +1,6 @@
 //! Interactive viewer (`patchwork view FILE`): a winit window driven by the LOD frame loop.
 //!
-//! Every frame: [`FrameLoop::update`] for the camera (re-tessellation within the budget), the
+//! Every frame: [`crate::frame::step`] (its [`crate::lod::FrameLoop::update`]) for the camera (re-tessellation within the budget), the
 //! scene drawn by the same [`Renderer`] the headless commands use (offscreen, read back with
 //! the patch-ID buffer that feeds visibility to the next frame), optional overlays (wireframe,
 //! drawn on the CPU with a depth test), then the image copied onto the window's surface by a
@@ -29,7 +29,8 @@ use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
 use winit::keyboard::{Key, NamedKey};
 use winit::window::{Window, WindowId};
 
-use crate::lod::{FrameLoop, LodOptions};
+use crate::frame::{FrameState, StepOptions};
+use crate::lod::LodOptions;
 use crate::model::Scene;
 use crate::render::gpu::Gpu;
 use crate::render::{FatBorders, Frame, RenderError, RenderOptions, Renderer, Shading};
@@ -50,6 +51,8 @@ pub enum ViewerError {
     Render(#[from] RenderError),
     #[error(transparent)]
     Write(#[from] crate::io::png::WriteError),
+    #[error(transparent)]
+    Check(#[from] crate::check::crack::CheckError),
 }
 
 /// Settings of a viewer session.
@@ -205,18 +208,7 @@ fn basis(up: DVec3) -> (DVec3, DVec3) {
     (x, up.cross(x))
 }
 
-/// Heat-map colour of a screen error `e` (pixels) for pixel error `asked`: blue when finer
-/// than asked, green on target, yellow to red when coarser (red at 4× the pixel error).
-pub fn heat_color(e: f64, asked: f64) -> [f32; 3] {
-    let r = (e / asked.max(1e-12)).max(1e-12).log2();
-    if r <= 0.0 {
-        let t = (-r / 2.0).min(1.0) as f32; // 1/4 of the asked error → pure blue
-        [0.1, 0.8 * (1.0 - t) + 0.2 * t, 0.2 + 0.8 * t]
-    } else {
-        let t = (r / 2.0).min(1.0) as f32;
-        [0.2 + 0.8 * t, 0.8 * (1.0 - t) + 0.1, 0.1]
-    }
-}
+pub use crate::frame::heat_color;
 
 /// Draws the visible edges of `meshes` onto `frame` (dark grey): an edge pixel is drawn where
 /// its depth is within 0.5 % of the depth buffer's (hidden edges stay hidden).
@@ -351,8 +343,7 @@ struct State {
     config: wgpu::SurfaceConfiguration,
     renderer: Renderer,
     present: Present,
-    lod: FrameLoop,
-    gpu_meshes: Option<(u64, crate::render::GpuMeshes)>,
+    frame: FrameState,
     last: Option<Frame>,
 }
 
@@ -539,15 +530,14 @@ impl App {
         renderer.primitives = self.options.primitives;
         eprintln!("adapter: {}", renderer.gpu().describe());
         let view = self.view(config.width, config.height);
-        let lod = FrameLoop::new(&self.scene, &view, self.options.lod);
+        let frame = FrameState::new(&self.scene, &view, self.options.lod);
         Ok(State {
             window,
             surface,
             config,
             renderer,
             present,
-            lod,
-            gpu_meshes: None,
+            frame,
             last: None,
         })
     }
@@ -572,66 +562,29 @@ impl App {
         };
         let start = Instant::now();
         // Animated: patches drawn moved, tessellated for where they are drawn.
-        let offsets = self
-            .playing
-            .as_ref()
-            .map(|p| p.explosion.at(p.amount()))
-            .filter(|o| o.iter().any(|v| *v != DVec3::ZERO));
-        let stats = match &offsets {
-            Some(o) => state
-                .lod
-                .update(&crate::anim::moved_scene(&self.scene, o), &view),
-            None => state.lod.update(&self.scene, &view),
-        };
-        let generation = state.lod.generation();
-        let moving = offsets.is_some();
-        if self.heat || moving || state.gpu_meshes.as_ref().is_none_or(|g| g.0 != generation) {
-            let asked = state.lod.options.pixel_error;
-            let mut meshes = if self.heat {
-                let errors = state.lod.patch_errors_px();
-                state
-                    .lod
-                    .meshes_with_index()
-                    .map(|(i, m)| PatchMesh {
-                        color: Some(heat_color(errors[i], asked)),
-                        ..m.clone()
-                    })
-                    .collect::<Vec<_>>()
-            } else {
-                state.lod.meshes().cloned().collect()
-            };
-            if let Some(o) = &offsets {
-                let indices: Vec<usize> = state.lod.meshes_with_index().map(|(i, _)| i).collect();
-                meshes = crate::anim::translated(indices.into_iter().zip(meshes.iter()), o);
-            }
-            let gen_key = if self.heat || moving {
-                u64::MAX
-            } else {
-                generation
-            };
-            state.gpu_meshes = Some((gen_key, state.renderer.upload(&meshes)));
-        }
-        let Some((_, gpu_meshes)) = state.gpu_meshes.as_ref() else {
-            return Ok(false);
-        };
-        let opts = RenderOptions {
-            shading: if self.heat {
-                Shading::Lit
-            } else {
-                self.shading
+        let offsets = self.playing.as_ref().map(|p| p.explosion.at(p.amount()));
+        let opts = StepOptions {
+            draw: RenderOptions {
+                shading: self.shading,
+                fat_borders: self.fat_borders,
+                msaa: 1,
+                depth: self.wireframe,
+                ..RenderOptions::default()
             },
-            fat_borders: self.fat_borders,
-            msaa: 1,
-            depth: self.wireframe,
-            ids: true,
-            ..RenderOptions::default()
+            offsets: offsets.as_deref(),
+            heat_map: self.heat,
+            check: false,
         };
-        let mut frame = state.renderer.render(gpu_meshes, &view, &opts)?;
-        if let Some(v) = frame.visible_ids(self.scene.patches.len()) {
-            state.lod.set_visible(&v);
-        }
+        let r = crate::frame::step(
+            &mut state.renderer,
+            &self.scene,
+            &mut state.frame,
+            &view,
+            &opts,
+        )?;
+        let (stats, mut frame) = (r.stats, r.frame);
         if self.wireframe {
-            draw_wireframe(&mut frame, &view, state.lod.meshes());
+            draw_wireframe(&mut frame, &view, state.frame.lod.meshes());
         }
         match state.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(t)
@@ -653,7 +606,7 @@ impl App {
         self.frames += 1;
         self.frame_time += dt;
         if self.last_title.elapsed() > Duration::from_millis(250) || self.options.frames.is_some() {
-            let (max, _) = state.lod.screen_errors();
+            let (max, _) = state.frame.lod.screen_errors();
             state.window.set_title(&format!(
                 "{} — {:.1} fps, {} triangles, queue {}, max error {:.2} px, pixel error {}, fat borders {}",
                 self.options.title,
@@ -661,7 +614,7 @@ impl App {
                 stats.triangles,
                 stats.queue_left,
                 max,
-                state.lod.options.pixel_error,
+                state.frame.lod.options.pixel_error,
                 self.fat_borders.name()
             ));
             self.last_title = Instant::now();
@@ -733,9 +686,6 @@ impl App {
             }
             Key::Character("h") => {
                 self.heat = !self.heat;
-                if let Some(s) = self.state.as_mut() {
-                    s.gpu_meshes = None;
-                }
             }
             Key::Character("+") | Key::Character("=") => self.scale_pixel_error(2.0),
             Key::Character("-") => self.scale_pixel_error(0.5),
@@ -751,7 +701,7 @@ impl App {
 
     fn scale_pixel_error(&mut self, factor: f64) {
         if let Some(s) = self.state.as_mut() {
-            let pe = &mut s.lod.options.pixel_error;
+            let pe = &mut s.frame.lod.options.pixel_error;
             *pe = (*pe * factor).clamp(0.125, 64.0);
         }
     }
@@ -901,15 +851,5 @@ mod tests {
         let moved = o.target.distance(t);
         let expected = o.distance * 2.0 * (22.5f64.to_radians()).tan();
         assert!((moved - expected).abs() < 1e-9, "{moved} vs {expected}");
-    }
-
-    #[test]
-    fn heat_colors_run_blue_green_red() {
-        let fine = heat_color(0.125, 0.5);
-        let on = heat_color(0.5, 0.5);
-        let coarse = heat_color(2.0, 0.5);
-        assert!(fine[2] > fine[0] && fine[2] > fine[1]);
-        assert!(on[1] > on[0] && on[1] > on[2]);
-        assert!(coarse[0] > coarse[1] && coarse[0] > coarse[2]);
     }
 }

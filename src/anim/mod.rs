@@ -15,16 +15,13 @@
 //! ([`translated`]; a translation keeps every error). Fat borders are recomputed from each
 //! frame's meshes, so they hold whichever neighbours a patch has in that frame.
 
-use std::time::Instant;
-
 use glam::DVec3;
 
-use crate::check::crack::{
-    CheckError, CrackCounts, SENTINEL, check_render_options, classify, reference_meshes,
-};
-use crate::lod::{FrameLoop, LodOptions};
+use crate::check::crack::{CheckError, CrackCounts};
+use crate::frame::{FrameState, StepOptions, step};
+use crate::lod::LodOptions;
 use crate::model::{Scene, Sphere};
-use crate::render::{FatBorders, Frame, RenderError, RenderOptions, Renderer};
+use crate::render::{Frame, RenderError, RenderOptions, Renderer};
 use crate::tessellate::PatchMesh;
 use crate::view::View;
 
@@ -314,73 +311,41 @@ pub fn run(
 ) -> Result<Vec<AnimRecord>, CheckError> {
     let n = opts.frames.max(1);
     let explosion = Explosion::new(scene, opts.by, opts.distance);
-    let draw = RenderOptions {
-        ids: true,
-        ..opts.render
-    };
-    let check = check_render_options(opts.render.fat_borders);
     let first = moved_scene(scene, &explosion.at(amount(0, n, opts.explode)));
-    let mut lod = FrameLoop::new(&first, view, opts.lod);
+    let mut state = FrameState::new(&first, view, opts.lod);
     let mut records = Vec::with_capacity(n);
     for k in 0..n {
         let a = amount(k, n, opts.explode);
         let offsets = explosion.at(a);
-        let moved = moved_scene(scene, &offsets);
-        let start = Instant::now();
-        let stats = lod.update(&moved, view);
-        let meshes = translated(lod.meshes_with_index(), &offsets);
-        let gpu = renderer.upload(&meshes);
-        let frame = renderer.render(&gpu, view, &draw)?;
-        if let Some(v) = frame.visible_ids(scene.patches.len()) {
-            lod.set_visible(&v);
+        let r = step(
+            renderer,
+            scene,
+            &mut state,
+            view,
+            &StepOptions {
+                draw: opts.render,
+                offsets: Some(&offsets),
+                check: opts.check,
+                ..StepOptions::default()
+            },
+        )?;
+        if let Some(dir) = &opts.save_failures
+            && let Some(v) = r.verdict.as_ref().filter(|v| v.failed())
+        {
+            v.save(dir, &format!("frame{k:04}"))?;
         }
-        let frame_ms = start.elapsed().as_secs_f64() * 1e3;
-        let (max_error_px, _) = lod.screen_errors();
-        let (cracks, cracks_off) = if opts.check {
-            let pe = lod.options.pixel_error;
-            let (reference, _) = reference_meshes(&moved, view, pe);
-            let reference = translated(reference.iter().enumerate(), &offsets);
-            let plain = RenderOptions {
-                fat_borders: FatBorders::Off,
-                ..check
-            };
-            let reference = renderer.render(&renderer.upload(&reference), view, &plain)?;
-            let actual = renderer.render(&gpu, view, &check)?;
-            // At the pixel error asked: a patch drawn coarser than asked (the queue behind)
-            // is still closed by its own, wider, fat borders.
-            let (c, mask) = classify(&reference, &actual, view, pe, SENTINEL)?;
-            if let Some(dir) = &opts.save_failures
-                && (c.cracks() > 0 || c.growth > 0)
-            {
-                for (suffix, img) in [("actual", actual.to_rgba_image()), ("diff", mask)] {
-                    let path = dir.join(format!("frame{k:04}-{suffix}.png"));
-                    if let Err(e) = crate::io::png::write_rgba(&path, &img) {
-                        eprintln!("warning: {e}");
-                    }
-                }
-            }
-            let off = if check.fat_borders == FatBorders::Off {
-                None
-            } else {
-                let actual = renderer.render(&gpu, view, &plain)?;
-                Some(classify(&reference, &actual, view, pe, SENTINEL)?.0)
-            };
-            (Some(c), off)
-        } else {
-            (None, None)
-        };
         let record = AnimRecord {
             frame: k,
             amount: a,
-            frame_ms,
-            tessellation_ms: stats.tessellation.as_secs_f64() * 1e3,
-            retessellated: stats.retessellated,
-            triangles: stats.triangles,
-            max_error_px,
-            cracks,
-            cracks_off,
+            frame_ms: r.frame_time.as_secs_f64() * 1e3,
+            tessellation_ms: r.stats.tessellation.as_secs_f64() * 1e3,
+            retessellated: r.stats.retessellated,
+            triangles: r.stats.triangles,
+            max_error_px: r.max_error_px,
+            cracks: r.verdict.map(|v| v.counts),
+            cracks_off: r.control,
         };
-        on_frame(&record, &frame)?;
+        on_frame(&record, &r.frame)?;
         records.push(record);
     }
     Ok(records)

@@ -155,6 +155,9 @@ pub fn contour_margin(pixel_error: f64) -> usize {
 pub enum CheckError {
     #[error(transparent)]
     Render(#[from] RenderError),
+    /// A failure image could not be written.
+    #[error(transparent)]
+    Write(#[from] crate::io::png::WriteError),
     /// An image was rendered without depth (`RenderOptions::depth`).
     #[error("the {0} image has no depth buffer (render it with `RenderOptions::depth`)")]
     MissingDepth(&'static str),
@@ -457,8 +460,6 @@ pub struct ViewResult {
 #[derive(Clone, Debug, Default)]
 pub struct CheckReport {
     pub views: Vec<ViewResult>,
-    /// Failure images that could not be written (the counts stand).
-    pub warnings: Vec<String>,
 }
 
 fn sum_counts<'a>(
@@ -536,7 +537,11 @@ impl Verdict {
     }
 
     /// Writes `{stem}-actual.png` and `{stem}-diff.png` into `dir` (a diagnostic aid).
-    pub fn save(&self, dir: &std::path::Path, stem: &str) -> Result<(), crate::io::png::WriteError> {
+    pub fn save(
+        &self,
+        dir: &std::path::Path,
+        stem: &str,
+    ) -> Result<(), crate::io::png::WriteError> {
         let actual = self.actual.to_rgba_image();
         crate::io::png::write_rgba(&dir.join(format!("{stem}-actual.png")), &actual)?;
         crate::io::png::write_rgba(&dir.join(format!("{stem}-diff.png")), &self.mask)
@@ -556,7 +561,7 @@ impl Judge {
         let reference = renderer.render(&gpu, view, &check_render_options(FatBorders::Off))?;
         Ok(Judge {
             reference,
-            view: view.clone(),
+            view: *view,
             pixel_error,
         })
     }
@@ -641,11 +646,8 @@ pub fn run_check_with(
                 && verdict.failed()
             {
                 let stem = format!("view{index:03}-fb{}{tag}", variant.name());
-                // Failure images are a diagnostic aid; a failure to write them is reported
-                // with the counts but does not hide them.
-                if let Err(e) = verdict.save(dir, &stem) {
-                    report.warnings.push(e.to_string());
-                }
+                // Asked for and not written: an error, not a lost diagnostic.
+                verdict.save(dir, &stem)?;
             }
             Ok(verdict.counts)
         };

@@ -5,10 +5,11 @@ use std::time::{Duration, Instant};
 
 use glam::DVec3;
 
-use crate::check::crack::{CheckError, SENTINEL, check_render_options, classify, reference_meshes};
-use crate::lod::{FrameLoop, LodOptions, PixelErrorController};
+use crate::check::crack::CheckError;
+use crate::frame::{FrameState, StepOptions, step};
+use crate::lod::{LodOptions, PixelErrorController};
 use crate::model::Scene;
-use crate::render::{FatBorders, RenderOptions, Renderer};
+use crate::render::{RenderOptions, Renderer};
 use crate::view::View;
 
 /// Where the camera is at frame `i` of `n`: orbit half a turn (40 % of the frames), zoom in
@@ -138,75 +139,44 @@ pub fn run(
     let n = opts.frames.max(1);
     let first = camera_path(scene, 0, n, opts.fov_y, opts.size);
     let t0 = Instant::now();
-    let mut lod = FrameLoop::new(scene, &first, opts.lod);
+    let mut state = FrameState::new(scene, &first, opts.lod);
     let initial_ms = t0.elapsed().as_secs_f64() * 1e3;
     let mut controller = opts
         .target
         .map(|t| PixelErrorController::new(t, opts.lod.pixel_error, 64.0));
-    let draw = RenderOptions {
-        ids: true,
-        ..RenderOptions::default()
+    // Cracks: against the reference for each view, at the pixel error asked, with fat borders
+    // as wide as each patch's own ε; the same frame without fat borders is the control.
+    let step_opts = StepOptions {
+        draw: RenderOptions::default(),
+        check: opts.cracks,
+        ..StepOptions::default()
     };
-    let check = check_render_options(FatBorders::Six);
     let mut records = Vec::with_capacity(n);
     // GPU buffers are rebuilt only when the drawn meshes change.
-    let t0 = Instant::now();
-    let mut gpu = renderer.upload(lod.meshes());
-    let initial_upload_ms = t0.elapsed().as_secs_f64() * 1e3;
-    let mut uploaded = lod.generation();
+    state.upload(renderer);
+    let initial_upload_ms = state.upload_ms;
     for i in 0..n {
         let view = camera_path(scene, i, n, opts.fov_y, opts.size);
-        let start = Instant::now();
-        let stats = lod.update(scene, &view);
-        if uploaded != lod.generation() {
-            gpu = renderer.upload(lod.meshes());
-            uploaded = lod.generation();
-        }
-        let frame = renderer.render(&gpu, &view, &draw)?;
-        if let Some(v) = frame.visible_ids(scene.patches.len()) {
-            lod.set_visible(&v);
-        }
-        let frame_time = start.elapsed();
-        let (max_error_px, p99_error_px) = lod.screen_errors();
-        let pixel_error = lod.options.pixel_error;
-        // Cracks: against the reference for this view, at the pixel error asked. A frame
-        // drawn coarser than asked (the queue behind its budget) is still closed by its fat
-        // borders, which are as wide as each patch's own ε; only its silhouettes may be off
-        // by more. The same frame without fat borders is the control.
-        let (crack_pixels, crack_pixels_off) = if opts.cracks {
-            let (ref_meshes, _) = reference_meshes(scene, &view, pixel_error);
-            let plain = RenderOptions {
-                fat_borders: FatBorders::Off,
-                ..check
-            };
-            let reference = renderer.render(&renderer.upload(&ref_meshes), &view, &plain)?;
-            let mut count = |o: &RenderOptions| -> Result<usize, CheckError> {
-                let actual = renderer.render(&gpu, &view, o)?;
-                let (c, _) = classify(&reference, &actual, &view, pixel_error, SENTINEL)?;
-                Ok(c.cracks())
-            };
-            (Some(count(&check)?), Some(count(&plain)?))
-        } else {
-            (None, None)
-        };
+        let r = step(renderer, scene, &mut state, &view, &step_opts)?;
+        let pixel_error = state.lod.options.pixel_error;
         let record = FrameRecord {
             frame: i,
-            frame_ms: frame_time.as_secs_f64() * 1e3,
-            tessellation_ms: stats.tessellation.as_secs_f64() * 1e3,
-            retessellated: stats.retessellated,
-            from_cache: stats.from_cache,
-            queue_left: stats.queue_left,
-            max_error_px,
-            p99_error_px,
-            triangles: stats.triangles,
+            frame_ms: r.frame_time.as_secs_f64() * 1e3,
+            tessellation_ms: r.stats.tessellation.as_secs_f64() * 1e3,
+            retessellated: r.stats.retessellated,
+            from_cache: r.stats.from_cache,
+            queue_left: r.stats.queue_left,
+            max_error_px: r.max_error_px,
+            p99_error_px: r.p99_error_px,
+            triangles: r.stats.triangles,
             pixel_error,
-            crack_pixels,
-            crack_pixels_off,
+            crack_pixels: r.verdict.map(|v| v.counts.cracks()),
+            crack_pixels_off: r.control.map(|c| c.cracks()),
         };
         on_frame(&record);
         records.push(record);
         if let Some(c) = controller.as_mut() {
-            lod.options.pixel_error = c.observe(stats.triangles, frame_time);
+            state.lod.options.pixel_error = c.observe(r.stats.triangles, r.frame_time);
         }
     }
     let mut summary = summarize(&records, initial_ms, jump_frames(n).1);

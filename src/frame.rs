@@ -1,0 +1,208 @@
+//! One frame of the LOD loop — the only implementation, driven by the viewer, `bench
+//! --flythrough` ([`crate::lod::flythrough`]) and `implode` ([`crate::anim`]).
+//!
+//! Balázs, Guthe and Klein, "Fat Borders" (2004), §4.2: per frame, update the level of detail
+//! within the time budget ([`FrameLoop::update`]), upload what changed, draw surfaces and fat
+//! borders (each patch's border as wide as its own current ε, so the frame is crack-free while
+//! the queue is behind), read the patch-ID buffer back for the next frame's visibility, and
+//! report the screen-space errors. An animation moves patches: they are tessellated for where
+//! they are drawn (moved bounding spheres) and translated at upload. Optionally the frame is
+//! judged against the watertight reference ([`crate::check::crack::Judge`]), with fat borders
+//! as drawn and, as a control, without them.
+
+use std::time::{Duration, Instant};
+
+use glam::DVec3;
+
+use crate::check::crack::{CheckError, CrackCounts, Judge, Verdict, reference_meshes};
+use crate::lod::{FrameLoop, LodOptions, UpdateStats};
+use crate::model::Scene;
+use crate::render::{FatBorders, Frame, GpuMeshes, RenderOptions, Renderer, Shading};
+use crate::tessellate::PatchMesh;
+use crate::view::View;
+
+/// Per-view state of the frame loop: the LOD state and what is uploaded. The scene stays
+/// immutable; two `FrameState`s over one scene are independent.
+#[derive(Debug)]
+pub struct FrameState {
+    pub lod: FrameLoop,
+    /// The uploaded meshes and the LOD generation they were made from (`None` = always
+    /// uploaded again: moved or recoloured meshes).
+    uploaded: Option<(Option<u64>, GpuMeshes)>,
+    /// Milliseconds spent on the last upload.
+    pub upload_ms: f64,
+}
+
+impl FrameState {
+    /// Tessellates every patch for `view` (no budget: the first frame must show something).
+    pub fn new(scene: &Scene, view: &View, options: LodOptions) -> FrameState {
+        FrameState {
+            lod: FrameLoop::new(scene, view, options),
+            uploaded: None,
+            upload_ms: 0.0,
+        }
+    }
+
+    /// Uploads the current meshes now (e.g. to time the first upload apart from the first
+    /// frame); later frames upload again only when the LOD changed them.
+    pub fn upload(&mut self, renderer: &Renderer) {
+        let t0 = Instant::now();
+        let gpu = renderer.upload(self.lod.meshes());
+        self.upload_ms = t0.elapsed().as_secs_f64() * 1e3;
+        self.uploaded = Some((Some(self.lod.generation()), gpu));
+    }
+}
+
+/// What a frame draws, beyond the camera.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct StepOptions<'a> {
+    /// How the frame is drawn (the patch-ID pass is always added, for visibility).
+    pub draw: RenderOptions,
+    /// Animation: per-patch offsets (indexed like the scene's patches).
+    pub offsets: Option<&'a [DVec3]>,
+    /// Colour every patch by its screen-space error ([`heat_color`]), lit.
+    pub heat_map: bool,
+    /// Judge the frame against the watertight reference (not timed).
+    pub check: bool,
+}
+
+/// What one frame did.
+#[derive(Debug)]
+pub struct StepResult {
+    pub frame: Frame,
+    pub stats: UpdateStats,
+    /// Update, upload, draw and ID readback (the check is not timed).
+    pub frame_time: Duration,
+    /// Largest and 99th-percentile screen-space error of the visible patches, pixels.
+    pub max_error_px: f64,
+    pub p99_error_px: f64,
+    /// With [`StepOptions::check`]: the frame as drawn, judged at the asked pixel error.
+    pub verdict: Option<Verdict>,
+    /// With [`StepOptions::check`] and fat borders drawn: the control, the same frame without
+    /// fat borders (shows that the check sees the cracks they close).
+    pub control: Option<CrackCounts>,
+}
+
+/// Runs one frame for `view` (see the module doc).
+pub fn step(
+    renderer: &mut Renderer,
+    scene: &Scene,
+    state: &mut FrameState,
+    view: &View,
+    opts: &StepOptions<'_>,
+) -> Result<StepResult, CheckError> {
+    let start = Instant::now();
+    let offsets = opts.offsets.filter(|o| o.iter().any(|v| *v != DVec3::ZERO));
+    let moved = offsets.map(|o| crate::anim::moved_scene(scene, o));
+    let drawn_scene = moved.as_ref().unwrap_or(scene);
+    let stats = state.lod.update(drawn_scene, view);
+    let generation = (offsets.is_none() && !opts.heat_map).then(|| state.lod.generation());
+    if generation.is_none() || state.uploaded.as_ref().is_none_or(|u| u.0 != generation) {
+        let t0 = Instant::now();
+        let gpu = if offsets.is_none() && !opts.heat_map {
+            renderer.upload(state.lod.meshes())
+        } else {
+            renderer.upload(&drawn_meshes(&state.lod, offsets, opts.heat_map))
+        };
+        state.upload_ms = t0.elapsed().as_secs_f64() * 1e3;
+        state.uploaded = Some((generation, gpu));
+    }
+    let Some((_, gpu)) = state.uploaded.as_ref() else {
+        unreachable!("uploaded just above")
+    };
+    let draw = RenderOptions {
+        ids: true,
+        shading: if opts.heat_map {
+            Shading::Lit
+        } else {
+            opts.draw.shading
+        },
+        ..opts.draw
+    };
+    let frame = renderer.render(gpu, view, &draw)?;
+    if let Some(v) = frame.visible_ids(scene.patches.len()) {
+        state.lod.set_visible(&v);
+    }
+    let frame_time = start.elapsed();
+    let (max_error_px, p99_error_px) = state.lod.screen_errors();
+    let (verdict, control) = if opts.check {
+        // At the pixel error asked: a patch drawn coarser than asked (the queue behind its
+        // budget) is still closed by its own, wider, fat borders.
+        let pe = state.lod.options.pixel_error;
+        let (mut reference, _) = reference_meshes(drawn_scene, view, pe);
+        if let Some(o) = offsets {
+            reference = crate::anim::translated(reference.iter().enumerate(), o);
+        }
+        let judge = Judge::new(renderer, &reference, view, pe)?;
+        let verdict = judge.count(renderer, gpu, opts.draw.fat_borders)?;
+        let control = if opts.draw.fat_borders == FatBorders::Off {
+            None
+        } else {
+            Some(judge.count(renderer, gpu, FatBorders::Off)?.counts)
+        };
+        (Some(verdict), control)
+    } else {
+        (None, None)
+    };
+    Ok(StepResult {
+        frame,
+        stats,
+        frame_time,
+        max_error_px,
+        p99_error_px,
+        verdict,
+        control,
+    })
+}
+
+/// The frame loop's meshes as drawn: translated by their patch's offset, or coloured by
+/// their screen-space error.
+fn drawn_meshes(lod: &FrameLoop, offsets: Option<&[DVec3]>, heat_map: bool) -> Vec<PatchMesh> {
+    let errors = heat_map.then(|| lod.patch_errors_px());
+    let asked = lod.options.pixel_error;
+    let meshes: Vec<PatchMesh> = lod
+        .meshes_with_index()
+        .map(|(i, m)| match &errors {
+            Some(e) => PatchMesh {
+                color: Some(heat_color(e[i], asked)),
+                ..m.clone()
+            },
+            None => m.clone(),
+        })
+        .collect();
+    match offsets {
+        Some(o) => {
+            let indices = lod.meshes_with_index().map(|(i, _)| i);
+            crate::anim::translated(indices.zip(meshes.iter()), o)
+        }
+        None => meshes,
+    }
+}
+
+/// Heat-map colour of a screen error `e` (pixels) for pixel error `asked`: blue when finer
+/// than asked, green on target, yellow to red when coarser (red at 4× the pixel error).
+pub fn heat_color(e: f64, asked: f64) -> [f32; 3] {
+    let r = (e / asked.max(1e-12)).max(1e-12).log2();
+    if r <= 0.0 {
+        let t = (-r / 2.0).min(1.0) as f32; // 1/4 of the asked error → pure blue
+        [0.1, 0.8 * (1.0 - t) + 0.2 * t, 0.2 + 0.8 * t]
+    } else {
+        let t = (r / 2.0).min(1.0) as f32;
+        [0.2 + 0.8 * t, 0.8 * (1.0 - t) + 0.1, 0.1]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn heat_colors_run_blue_green_red() {
+        let fine = heat_color(0.125, 0.5);
+        let on = heat_color(0.5, 0.5);
+        let coarse = heat_color(2.0, 0.5);
+        assert!(fine[2] > fine[0] && fine[2] > fine[1]);
+        assert!(on[1] > on[0] && on[1] > on[2]);
+        assert!(coarse[0] > coarse[1] && coarse[0] > coarse[2]);
+    }
+}
