@@ -14,6 +14,7 @@
 //! found "abc"`. Readers never panic on malformed input.
 
 pub mod bpt;
+pub mod depth;
 pub mod gltf_out;
 pub mod mesh;
 pub mod png;
