@@ -15,6 +15,7 @@
 
 pub mod bpt;
 pub mod depth;
+pub mod export;
 pub mod gltf_out;
 pub mod mesh;
 pub mod png;
