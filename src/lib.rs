@@ -18,6 +18,7 @@ pub mod lod;
 pub mod model;
 pub mod mt;
 pub mod render;
+pub mod report;
 pub mod strips;
 pub mod tessellate;
 pub mod view;

@@ -14,6 +14,8 @@
 //! found "abc"`. Readers never panic on malformed input.
 
 pub mod bpt;
+pub mod depth;
+pub mod export;
 pub mod gltf_out;
 pub mod mesh;
 pub mod png;

@@ -1,0 +1,272 @@
+//! Argument groups shared by several commands, and the one place each is validated.
+//!
+//! Values that are wrong on their own (`--size 0x1`, `--msaa 3`, `--eye 1,2`) are refused by
+//! clap's value parsers while parsing; ranges that depend on nothing else are checked by the
+//! `validate`-style functions here into typed values, called where the command first needs
+//! them (after the model is loaded for the camera, so a missing file is reported first).
+
+use std::time::Duration;
+
+use clap::Args;
+use glam::DVec3;
+
+use patchwork::lod::LodOptions;
+use patchwork::model::Scene;
+use patchwork::render::{FatBorders, Primitives, RenderOptions, Shading};
+use patchwork::view::{self, View};
+
+use crate::error::CliError;
+
+fn parse_triple<T: std::str::FromStr>(s: &str, what: &str) -> Result<[T; 3], String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    if parts.len() != 3 {
+        return Err(format!(
+            "expected {what} as three comma-separated numbers, got {s:?}"
+        ));
+    }
+    let mut out = Vec::with_capacity(3);
+    for p in parts {
+        out.push(
+            p.parse::<T>()
+                .map_err(|_| format!("{p:?} is not a valid {what} component"))?,
+        );
+    }
+    out.try_into()
+        .map_err(|_| format!("expected three numbers, got {s:?}"))
+}
+
+pub fn parse_vec3(s: &str) -> Result<DVec3, String> {
+    let [x, y, z] = parse_triple::<f64>(s, "X,Y,Z")?;
+    let v = DVec3::new(x, y, z);
+    if !v.is_finite() {
+        return Err(format!("{s:?} is not finite"));
+    }
+    Ok(v)
+}
+
+pub fn parse_rgb(s: &str) -> Result<[u8; 3], String> {
+    parse_triple::<u8>(s, "R,G,B (0-255)")
+}
+
+pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("expected WxH, got {s:?}"))?;
+    let w: u32 = w
+        .trim()
+        .parse()
+        .map_err(|_| format!("bad width in {s:?}"))?;
+    let h: u32 = h
+        .trim()
+        .parse()
+        .map_err(|_| format!("bad height in {s:?}"))?;
+    if w == 0 || h == 0 {
+        return Err(format!("image size must be at least 1x1, got {w}x{h}"));
+    }
+    Ok((w, h))
+}
+
+pub fn parse_msaa(s: &str) -> Result<u32, String> {
+    match s {
+        "1" => Ok(1),
+        "4" => Ok(4),
+        _ => Err(format!("MSAA must be 1 or 4, got {s:?}")),
+    }
+}
+
+/// `--pixel-error`: a positive number of pixels.
+pub fn pixel_error(px: f64) -> Result<f64, CliError> {
+    if !(px.is_finite() && px > 0.0) {
+        return Err(CliError::OutOfRange {
+            flag: "--pixel-error",
+            value: px,
+            range: "a positive number of pixels",
+        });
+    }
+    Ok(px)
+}
+
+/// `--fov` in degrees → the vertical field of view in radians.
+pub fn fov_y(deg: f64) -> Result<f64, CliError> {
+    if !(deg.is_finite() && deg > 0.5 && deg < 179.0) {
+        return Err(CliError::OutOfRange {
+            flag: "--fov",
+            value: deg,
+            range: "between 0.5 and 179 degrees",
+        });
+    }
+    Ok(deg.to_radians())
+}
+
+/// A positive finite number of milliseconds → a duration.
+pub fn positive_ms(flag: &'static str, ms: f64) -> Result<Duration, CliError> {
+    if !(ms.is_finite() && ms > 0.0) {
+        return Err(CliError::NotPositive { flag, value: ms });
+    }
+    Ok(Duration::from_secs_f64(ms / 1e3))
+}
+
+/// A count of at least `min`.
+pub fn at_least(flag: &'static str, value: usize, min: usize) -> Result<usize, CliError> {
+    if value < min {
+        return Err(CliError::TooFew { flag, value, min });
+    }
+    Ok(value)
+}
+
+/// `--distance`: a flight distance ≥ 0 (× the model's radius).
+pub fn distance(value: f64) -> Result<f64, CliError> {
+    if !(value.is_finite() && value >= 0.0) {
+        return Err(CliError::Negative {
+            flag: "--distance",
+            value,
+        });
+    }
+    Ok(value)
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct CameraArgs {
+    /// Image size in pixels.
+    #[arg(long, default_value = "1024x768", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Eye position (default: frames the model's bounding sphere from a three-quarter view).
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    pub eye: Option<DVec3>,
+    /// Point looked at (default: the model's centre).
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    pub target: Option<DVec3>,
+    /// Up vector (default 0,1,0; for z-up formats such as .bpt, 0,0,1).
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    pub up: Option<DVec3>,
+    /// Vertical field of view in degrees.
+    #[arg(long, default_value_t = view::DEFAULT_FOV_Y_DEG)]
+    pub fov: f64,
+    /// Allowed screen-space error in pixels (ε per patch follows from it).
+    #[arg(long, default_value_t = view::DEFAULT_PIXEL_ERROR)]
+    pub pixel_error: f64,
+}
+
+/// [`CameraArgs`] with the field of view and pixel error checked.
+#[derive(Debug, Clone, Copy)]
+pub struct Camera {
+    pub size: (u32, u32),
+    pub eye: Option<DVec3>,
+    pub target: Option<DVec3>,
+    pub up: Option<DVec3>,
+    /// Radians.
+    pub fov_y: f64,
+    pub pixel_error: f64,
+}
+
+impl CameraArgs {
+    pub fn validate(&self) -> Result<Camera, CliError> {
+        Ok(Camera {
+            size: self.size,
+            eye: self.eye,
+            target: self.target,
+            up: self.up,
+            fov_y: fov_y(self.fov)?,
+            pixel_error: pixel_error(self.pixel_error)?,
+        })
+    }
+}
+
+impl Camera {
+    /// The view of `scene`: the given eye, or the framing view shifted to the target; up and
+    /// target default to the scene's.
+    pub fn view(&self, scene: &Scene) -> Result<View, CliError> {
+        let up = self.up.unwrap_or_else(|| scene.up.vector());
+        if up.length() < 1e-12 {
+            return Err(CliError::ZeroUp);
+        }
+        let target = self.target.unwrap_or(scene.bounds.center);
+        let (fov, size) = (self.fov_y, self.size);
+        let view = match self.eye {
+            Some(eye) => {
+                if eye.distance(target) < 1e-12 {
+                    return Err(CliError::EyeAtTarget { eye });
+                }
+                let direction = target - eye;
+                if direction.cross(up).length() < 1e-9 * direction.length() * up.length() {
+                    return Err(CliError::UpAlongView { up, direction });
+                }
+                View::new(eye, target, up, fov, size, &scene.bounds)
+            }
+            None => {
+                let mut v = View::framing(&scene.bounds, up, fov, size);
+                let shift = target - v.target;
+                v.eye += shift;
+                v.target = target;
+                View::new(v.eye, v.target, up, fov, size, &scene.bounds)
+            }
+        };
+        Ok(view)
+    }
+}
+
+#[derive(Args, Debug, Clone, Copy)]
+pub struct BudgetArgs {
+    /// Re-tessellation time budget per frame, milliseconds.
+    #[arg(long, default_value_t = 40.0)]
+    pub budget_ms: f64,
+}
+
+impl BudgetArgs {
+    pub fn validate(&self) -> Result<Duration, CliError> {
+        positive_ms("--budget-ms", self.budget_ms)
+    }
+}
+
+/// The frame loop's options from a checked pixel error and budget.
+pub fn lod_options(pixel_error: f64, budget: Duration) -> LodOptions {
+    LodOptions {
+        pixel_error,
+        budget,
+        ..LodOptions::default()
+    }
+}
+
+#[derive(Args, Debug, Clone, Copy)]
+pub struct PrimitivesArg {
+    /// Surface primitives: `auto` (lists for tessellated patches, multiresolution strips for
+    /// mesh patches: fastest measured), `list` (indexed triangles), `strips` (static triangle
+    /// strips by tunneling; per arc for mesh patches), `mts` (mesh patches: multiresolution
+    /// strips at each cut) or `repair` (mesh patches: strips repaired by tunneling as the cut
+    /// moves).
+    #[arg(long, default_value = "auto")]
+    pub primitives: Primitives,
+}
+
+// How images are drawn (shared by `render` and `implode`); every value is checked by its
+// parser.
+#[derive(Args, Debug, Clone, Copy)]
+pub struct DrawArgs {
+    /// lit, flat or ids.
+    #[arg(long, default_value = "lit")]
+    pub shading: Shading,
+    /// Background colour R,G,B (0–255).
+    #[arg(long, default_value = "255,255,255", value_parser = parse_rgb)]
+    pub background: [u8; 3],
+    /// Fat-border variant: off, 6, 4 or 2 displaced vertices per border vertex.
+    #[arg(long, default_value = "6")]
+    pub fat_borders: FatBorders,
+    /// Samples per pixel: 1 or 4.
+    #[arg(long, default_value_t = 4, value_parser = parse_msaa)]
+    pub msaa: u32,
+    #[command(flatten)]
+    pub primitives: PrimitivesArg,
+}
+
+impl DrawArgs {
+    pub fn options(&self) -> RenderOptions {
+        RenderOptions {
+            shading: self.shading,
+            background: self.background,
+            fat_borders: self.fat_borders,
+            msaa: self.msaa,
+            depth: false,
+            ..RenderOptions::default()
+        }
+    }
+}

@@ -1,0 +1,237 @@
+//! `patchwork implode`: parts (or patches) flying together or apart — numbered PNGs, a GIF,
+//! `frames.csv` (`patchwork::report::implode`) and an MP4 through `ffmpeg` when it is on the
+//! PATH. Exit code 1 when `--check` finds a frame that fails.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+
+use clap::Args;
+
+use patchwork::anim::{
+    AnimOptions, Explosion, GroupBy, frames_pass, growth_within_bound, run as run_animation,
+};
+use patchwork::io::png;
+use patchwork::render::Renderer;
+use patchwork::report::implode::{CrackSummary, FrameTimes, write_frames_csv};
+
+use super::{load, progress};
+use crate::args::{BudgetArgs, CameraArgs, DrawArgs, at_least, distance, lod_options};
+use crate::error::CliError;
+
+#[derive(Args, Debug)]
+pub struct ImplodeArgs {
+    /// Model file (.bpt, .step, .stp, .glb, .gltf, .obj, .ply).
+    file: PathBuf,
+    /// Output folder (created if missing): frame-0000.png, …, implode.gif (explode.gif), and
+    /// frames.csv with every frame's figures.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Number of frames.
+    #[arg(long, default_value_t = 48)]
+    frames: usize,
+    /// Explode (assembled → apart) instead of implode (apart → assembled).
+    #[arg(long)]
+    explode: bool,
+    /// What moves as one: parts (each placed part of an assembly) or patches.
+    #[arg(long, default_value = "parts")]
+    by: GroupBy,
+    /// Flight distance at full explosion, × the model's radius.
+    #[arg(long, default_value_t = 1.0)]
+    distance: f64,
+    /// Frames per second of the GIF and MP4.
+    #[arg(long, default_value_t = 24)]
+    fps: u32,
+    #[command(flatten)]
+    budget: BudgetArgs,
+    /// Write no GIF.
+    #[arg(long)]
+    no_gif: bool,
+    /// Write no MP4 even when ffmpeg is found.
+    #[arg(long)]
+    no_mp4: bool,
+    /// Count crack and growth pixels in every frame (against the moved watertight reference).
+    #[arg(long)]
+    check: bool,
+    /// With --check: write check images and crack masks of frames with cracks or growth here.
+    #[arg(long, requires = "check")]
+    save_failures: Option<PathBuf>,
+    #[command(flatten)]
+    camera: CameraArgs,
+    #[command(flatten)]
+    draw: DrawArgs,
+}
+
+fn create_dir(dir: &Path) -> Result<(), CliError> {
+    std::fs::create_dir_all(dir).map_err(|source| CliError::CreateDir {
+        path: dir.to_owned(),
+        source,
+    })
+}
+
+/// Whether the frames passed (always, without `--check`).
+pub fn run(args: &ImplodeArgs) -> Result<bool, CliError> {
+    let frames = at_least("--frames", args.frames, 1)?;
+    let distance = distance(args.distance)?;
+    at_least("--fps", args.fps as usize, 1)?;
+    let fps = args.fps;
+    let budget = args.budget.validate()?;
+    let scene = load(&args.file)?;
+    // Frame the whole flight: the view holds every frame.
+    let explosion = Explosion::new(&scene, args.by, distance);
+    let mut framing = scene.clone();
+    framing.bounds = explosion.bounds(&scene);
+    let camera = args.camera.validate()?;
+    let view = camera.view(&framing)?;
+    create_dir(&args.output)?;
+    let mut renderer = Renderer::new()?;
+    renderer.primitives = args.draw.primitives.primitives;
+    eprintln!("adapter: {}", renderer.gpu().describe());
+    let opts = AnimOptions {
+        frames,
+        explode: args.explode,
+        by: args.by,
+        distance,
+        lod: lod_options(camera.pixel_error, budget),
+        render: args.draw.options(),
+        check: args.check,
+        save_failures: args.save_failures.clone(),
+    };
+    if let Some(dir) = &args.save_failures {
+        create_dir(dir)?;
+    }
+    let name = if args.explode { "explode" } else { "implode" };
+    let mut gif = if args.no_gif {
+        None
+    } else {
+        let delay = (1000 / fps).max(10);
+        Some(png::GifWriter::create(
+            &args.output.join(format!("{name}.gif")),
+            delay,
+        )?)
+    };
+    let pb = progress(frames, "frames");
+    let mut write_error: Option<CliError> = None;
+    let records = run_animation(&mut renderer, &scene, &view, &opts, |r, frame| {
+        let img = frame.to_rgba_image();
+        let path = args.output.join(format!("frame-{:04}.png", r.frame));
+        let written = png::write_rgba(&path, &img)
+            .and_then(|()| gif.as_mut().map_or(Ok(()), |g| g.add(&img)));
+        if let Err(e) = written
+            && write_error.is_none()
+        {
+            write_error = Some(e.into());
+        }
+        pb.inc(1);
+        Ok(())
+    })?;
+    pb.finish_and_clear();
+    if let Some(e) = write_error {
+        return Err(e);
+    }
+    if let Some(g) = gif {
+        g.finish()?;
+    }
+    let mp4 = if args.no_mp4 {
+        None
+    } else {
+        write_mp4(&args.output, name, fps)?
+    };
+    write_frames_csv(&args.output.join("frames.csv"), &records)?;
+    let times = FrameTimes::of(&records);
+    println!(
+        "{name} of {} by {:?}: {} groups, {} frames at {}x{} — {:.1} frames per second (mean {:.1} ms, p50 {:.1} ms, max {:.1} ms per frame: frame loop, upload, draw; PNG writing not counted)",
+        args.file.display(),
+        args.by,
+        explosion.groups,
+        times.frames,
+        view.width,
+        view.height,
+        times.per_second,
+        times.mean_ms,
+        times.p50_ms,
+        times.max_ms
+    );
+    println!(
+        "wrote {}/frame-0000.png … frame-{:04}.png{}{}",
+        args.output.display(),
+        records.len().saturating_sub(1),
+        if args.no_gif {
+            String::new()
+        } else {
+            format!(", {name}.gif")
+        },
+        mp4.map_or(String::new(), |p| format!(", {}", p.display()))
+    );
+    if !args.check {
+        return Ok(true);
+    }
+    let pe = camera.pixel_error;
+    let c = CrackSummary::of(&records);
+    let bound = records
+        .iter()
+        .find_map(|r| r.cracks)
+        .map_or(String::new(), |first| {
+            growth_within_bound(&first, args.by, explosion.groups, pe).0
+        });
+    println!(
+        "crack pixels: {} in all frames, {} frames with any, {} in the last frame; growth at most {} pixels a frame, at most {} px out (bound {bound})",
+        c.cracks, c.frames_with_cracks, c.last, c.most_growth, c.worst_growth_px,
+    );
+    let ok = frames_pass(&records, args.by, explosion.groups, pe);
+    if !ok {
+        eprintln!(
+            "check failed: {}",
+            match args.by {
+                GroupBy::Parts =>
+                    "moving parts must be crack-free in every frame, growth within the bound",
+                GroupBy::Patches =>
+                    "the assembled frame must be crack-free, growth within the bound in every frame",
+            }
+        );
+    }
+    Ok(ok)
+}
+
+/// Encodes `dir/frame-%04d.png` as `dir/NAME.mp4` (ffmpeg's default MP4 encoder, via a
+/// temporary name) when an `ffmpeg` binary is on the PATH; says so and returns `None` when
+/// there is none.
+fn write_mp4(dir: &Path, name: &str, fps: u32) -> Result<Option<PathBuf>, CliError> {
+    let found = Command::new("ffmpeg")
+        .arg("-version")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success());
+    if !found {
+        eprintln!("note: no ffmpeg on the PATH, so no MP4 (the PNGs and the GIF are written)");
+        return Ok(None);
+    }
+    let out = dir.join(format!("{name}.mp4"));
+    let tmp = dir.join(format!(".{name}.{}.tmp.mp4", std::process::id()));
+    let status = Command::new("ffmpeg")
+        .args(["-y", "-loglevel", "error", "-framerate"])
+        .arg(fps.to_string())
+        .arg("-i")
+        .arg(dir.join("frame-%04d.png"))
+        .args([
+            "-vf",
+            "pad=ceil(iw/2)*2:ceil(ih/2)*2",
+            "-pix_fmt",
+            "yuv420p",
+        ])
+        .arg(&tmp)
+        .status()
+        .map_err(CliError::FfmpegStart)?;
+    if !status.success() {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(CliError::FfmpegFailed {
+            status,
+            dir: dir.to_owned(),
+        });
+    }
+    std::fs::rename(&tmp, &out).map_err(|source| CliError::Io {
+        path: out.clone(),
+        source,
+    })?;
+    Ok(Some(out))
+}

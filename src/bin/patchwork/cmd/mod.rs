@@ -1,0 +1,62 @@
+//! One module per command: its flags, and `run`, which checks them, calls the library and
+//! prints. What several commands print the same way is here.
+
+pub mod bench;
+pub mod check;
+pub mod export;
+pub mod implode;
+pub mod render;
+pub mod stats;
+pub mod view;
+
+use std::path::Path;
+
+use indicatif::{ProgressBar, ProgressStyle};
+
+use patchwork::model::Scene;
+use patchwork::tessellate::PatchMesh;
+
+use crate::error::CliError;
+
+/// Loads a model and tells the user (stderr) what was left out and why.
+pub fn load(path: &Path) -> Result<Scene, CliError> {
+    let scene = patchwork::io::load(path)?;
+    for w in &scene.warnings {
+        eprintln!("warning: {}: {w}", path.display());
+    }
+    if !scene.skipped.is_empty() {
+        eprintln!(
+            "warning: {}: {} face(s) skipped:",
+            path.display(),
+            scene.skipped.len()
+        );
+        for s in &scene.skipped {
+            eprintln!("  face #{}: {}", s.face, s.reason);
+        }
+    }
+    Ok(scene)
+}
+
+/// Reports patches whose tessellation failed (their faces are not drawn in this frame).
+pub fn report_failures(meshes: &[PatchMesh]) {
+    let failed: Vec<&str> = meshes.iter().filter_map(|m| m.failure.as_deref()).collect();
+    if !failed.is_empty() {
+        eprintln!(
+            "warning: {} patch(es) could not be tessellated:",
+            failed.len()
+        );
+        for f in failed.iter().take(10) {
+            eprintln!("  {f}");
+        }
+    }
+}
+
+/// A progress bar over `n` `what`s (views, frames) on stderr.
+pub fn progress(n: usize, what: &str) -> ProgressBar {
+    let pb = ProgressBar::new(n as u64);
+    pb.set_style(
+        ProgressStyle::with_template(&format!("{{bar:40}} {{pos}}/{{len}} {what} {{elapsed}}"))
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    pb
+}

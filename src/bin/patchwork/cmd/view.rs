@@ -1,0 +1,107 @@
+//! `patchwork view`: the interactive viewer (`patchwork::viewer`), or a scripted run of it.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use patchwork::anim::GroupBy;
+use patchwork::view;
+use patchwork::viewer::{ViewerAnimation, ViewerOptions, script_key};
+
+use super::load;
+use crate::args::{
+    BudgetArgs, PrimitivesArg, at_least, distance, fov_y, lod_options, parse_size, pixel_error,
+};
+use crate::error::CliError;
+
+#[derive(Args, Debug)]
+pub struct ViewArgs {
+    /// Model file (.bpt, .step, .stp, .glb, .gltf, .obj, .ply).
+    file: PathBuf,
+    /// Window size.
+    #[arg(long, default_value = "1024x768", value_parser = parse_size)]
+    size: (u32, u32),
+    /// Vertical field of view in degrees.
+    #[arg(long, default_value_t = view::DEFAULT_FOV_Y_DEG)]
+    fov: f64,
+    /// Pixel error at start (`+`/`-` change it).
+    #[arg(long, default_value_t = view::DEFAULT_PIXEL_ERROR)]
+    pixel_error: f64,
+    #[command(flatten)]
+    budget: BudgetArgs,
+    /// Scripted run: draw this many frames, then exit.
+    #[arg(long)]
+    frames: Option<usize>,
+    /// With --frames: write the last frame here.
+    #[arg(long, requires = "frames")]
+    screenshot: Option<PathBuf>,
+    /// With --frames: keys pressed one per frame from the first, comma-separated
+    /// (e.g. `h,+` or `b,b,w`; names: characters, left, right, up, down, pageup, pagedown,
+    /// space).
+    #[arg(long, requires = "frames", value_delimiter = ',')]
+    keys: Vec<String>,
+    /// Play an implosion/explosion loop (space pauses and resumes).
+    #[arg(long)]
+    implode: bool,
+    /// With --implode: parts or patches move.
+    #[arg(long, default_value = "parts", requires = "implode")]
+    by: GroupBy,
+    /// With --implode: flight distance, × the model's radius.
+    #[arg(long, default_value_t = 1.0, requires = "implode")]
+    distance: f64,
+    /// With --implode: frames per implosion.
+    #[arg(long, default_value_t = 60, requires = "implode")]
+    implode_frames: usize,
+    #[command(flatten)]
+    primitives: PrimitivesArg,
+}
+
+pub fn run(args: &ViewArgs) -> Result<(), CliError> {
+    let fov_y = fov_y(args.fov)?;
+    let pixel_error = pixel_error(args.pixel_error)?;
+    let budget = args.budget.validate()?;
+    let frames = args
+        .frames
+        .map(|n| at_least("--frames", n, 1))
+        .transpose()?;
+    let distance = distance(args.distance)?;
+    if let Some(k) = args.keys.iter().find(|k| script_key(k).is_none()) {
+        return Err(CliError::UnknownKey { key: k.clone() });
+    }
+    if let Some(n) = frames
+        && args.keys.len() > n
+    {
+        return Err(CliError::TooManyKeys {
+            keys: args.keys.len(),
+            frames: n,
+        });
+    }
+    let scene = load(&args.file)?;
+    let title = args.file.file_name().map_or_else(
+        || "patchwork".into(),
+        |n| format!("patchwork — {}", n.to_string_lossy()),
+    );
+    let report = patchwork::viewer::run(
+        scene,
+        ViewerOptions {
+            title,
+            size: args.size,
+            fov_y,
+            lod: lod_options(pixel_error, budget),
+            frames,
+            screenshot: args.screenshot.clone(),
+            keys: args.keys.clone(),
+            implode: args.implode.then_some(ViewerAnimation {
+                by: args.by,
+                distance,
+                frames: args.implode_frames.max(2),
+            }),
+            primitives: args.primitives.primitives,
+        },
+    )?;
+    eprintln!(
+        "{} frames ({} presented), {:.1} ms per frame on average",
+        report.frames, report.presented, report.mean_frame_ms
+    );
+    Ok(())
+}

@@ -1,0 +1,92 @@
+//! Every error the `patchwork` command reports (exit code 2, `error: <message>`).
+//!
+//! The library's errors pass through unchanged (their messages already name the file); the
+//! command's own variants name the flag and carry the value that was refused.
+
+use std::path::PathBuf;
+use std::process::ExitStatus;
+
+use glam::DVec3;
+use thiserror::Error;
+
+use patchwork::check::CheckError;
+use patchwork::io::LoadError;
+use patchwork::io::depth::DepthError;
+use patchwork::io::export::ExportError;
+use patchwork::io::gltf_out::GltfWriteError;
+use patchwork::io::png::WriteError;
+use patchwork::render::RenderError;
+use patchwork::viewer::ViewerError;
+
+#[derive(Debug, Error)]
+pub enum CliError {
+    #[error(transparent)]
+    Load(#[from] LoadError),
+    #[error(transparent)]
+    Render(#[from] RenderError),
+    #[error(transparent)]
+    Check(#[from] CheckError),
+    #[error(transparent)]
+    Write(#[from] WriteError),
+    #[error(transparent)]
+    Gltf(#[from] GltfWriteError),
+    #[error(transparent)]
+    Export(#[from] ExportError),
+    #[error(transparent)]
+    Depth(#[from] DepthError),
+    #[error(transparent)]
+    Viewer(#[from] ViewerError),
+
+    /// A number outside its range: `--fov must be between 0.5 and 179 degrees, got 0`.
+    #[error("{flag} must be {range}, got {value}")]
+    OutOfRange {
+        flag: &'static str,
+        value: f64,
+        range: &'static str,
+    },
+    /// `--budget-ms must be a positive number, not 0`.
+    #[error("{flag} must be a positive number, not {value}")]
+    NotPositive { flag: &'static str, value: f64 },
+    /// `--distance must be a number ≥ 0, not -1`.
+    #[error("{flag} must be a number ≥ 0, not {value}")]
+    Negative { flag: &'static str, value: f64 },
+    /// A count below its minimum: `--frames must be at least 2`.
+    #[error("{flag} must be at least {min}")]
+    TooFew {
+        flag: &'static str,
+        value: usize,
+        min: usize,
+    },
+    #[error("--up must not be the zero vector")]
+    ZeroUp,
+    #[error("--eye and --target must differ")]
+    EyeAtTarget { eye: DVec3 },
+    #[error("--up must not be parallel to the viewing direction")]
+    UpAlongView { up: DVec3, direction: DVec3 },
+    /// `bench` without a benchmark flag.
+    #[error("say which benchmark: --flythrough")]
+    NoBenchmark,
+    #[error("--keys: unknown key {key:?}")]
+    UnknownKey { key: String },
+    #[error("--keys: {keys} keys for {frames} frames")]
+    TooManyKeys { keys: usize, frames: usize },
+
+    /// A file or folder the command itself handles (not through the library).
+    #[error("{}: {source}", .path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// An output folder that cannot be created (`implode`).
+    #[error("{}: cannot create the folder: {source}", .path.display())]
+    CreateDir {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// `ffmpeg` was found but could not be started.
+    #[error("ffmpeg: {0}")]
+    FfmpegStart(#[source] std::io::Error),
+    /// `ffmpeg` ran and failed.
+    #[error("ffmpeg failed ({status}); the PNGs are in {}", .dir.display())]
+    FfmpegFailed { status: ExitStatus, dir: PathBuf },
+}

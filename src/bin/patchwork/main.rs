@@ -1,0 +1,64 @@
+//! `patchwork` command line: render, stats, check, export, bench, view, implode.
+//!
+//! Thin: each command lives in `cmd/<name>.rs` (its flags, checks, library calls, printing);
+//! shared flag groups and their checks in `args.rs`; errors in `error.rs`. Exit codes: 0 done
+//! (or passed), 1 a check or benchmark ran and failed, 2 an error (`error: …` on stderr).
+
+mod args;
+mod cmd;
+mod error;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "patchwork",
+    version,
+    about = "Crack-free rendering of multi-patch surfaces with fat borders"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Render a model to a PNG (headless; software rasterizers are fine).
+    Render(cmd::render::RenderArgs),
+    /// Tessellate for a view and print patches, triangles, border vertices, ε range, time.
+    Stats(cmd::stats::StatsArgs),
+    /// Render random views with fat borders off and on and count crack and growth pixels.
+    Check(cmd::check::CheckArgs),
+    /// Write the tessellation as binary glTF (.glb): one mesh per part, one node per placement.
+    Export(cmd::export::ExportArgs),
+    /// Benchmarks: `--flythrough` drives a recorded camera path through the LOD frame loop.
+    Bench(cmd::bench::BenchArgs),
+    /// Interactive viewer (needs a display; `xvfb-run -a` gives a virtual one).
+    View(cmd::view::ViewArgs),
+    /// Animate parts (or patches) flying together (or apart): numbered PNGs, an animated GIF,
+    /// and an MP4 when `ffmpeg` is on the PATH.
+    Implode(cmd::implode::ImplodeArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let passed = match &cli.command {
+        Command::Render(a) => cmd::render::run(a).map(|()| true),
+        Command::Stats(a) => cmd::stats::run(a).map(|()| true),
+        Command::Check(a) => cmd::check::run(a),
+        Command::Export(a) => cmd::export::run(a).map(|()| true),
+        Command::Bench(a) => cmd::bench::run(a),
+        Command::View(a) => cmd::view::run(a).map(|()| true),
+        Command::Implode(a) => cmd::implode::run(a),
+    };
+    match passed {
+        Ok(true) => ExitCode::SUCCESS,
+        Ok(false) => ExitCode::from(1),
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(2)
+        }
+    }
+}

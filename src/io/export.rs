@@ -1,0 +1,296 @@
+//! A scene's tessellation, assembled for export: one mesh per shell, one node per placement.
+//!
+//! [`assemble`] turns a [`Scene`] into the [`ExportScene`] that [`super::gltf_out`] writes:
+//! - one node per placed solid / shell ([`Scene::instances`]) that has patches, named after its
+//!   part and occurrence, with the instance's transform;
+//! - one mesh per shell (per part outside STEP: the key is `(part, shell)`), tessellated once in
+//!   the shell's own coordinates and shared by every placement of it; its colour is the first
+//!   coloured face's;
+//! - every face tessellated to one ε in its own units: the absolute tolerance divided by the
+//!   placement's scale, or, for a pixel error, the finest ε that any placement of the same face
+//!   asks for in [`default_view`].
+//!
+//! Guarantees: deterministic (instances, patches and meshes in scene order); the tolerance is
+//! checked first, so a bad one never starts tessellating. Not done: faces whose tessellation
+//! failed are left out silently (their [`PatchMesh::failure`] is not reported), and no mesh is
+//! de-duplicated beyond the `(part, shell)` key.
+
+use std::collections::HashMap;
+
+use glam::DMat4;
+use thiserror::Error;
+
+use super::gltf_out::{ExportMesh, ExportNode, ExportScene};
+use crate::model::{Patch, PatchSurface, Scene};
+use crate::tessellate::{PatchMesh, Tessellators};
+use crate::view::{self, View};
+
+/// Image size of [`default_view`], the view a pixel error is measured in.
+pub const EXPORT_VIEW_SIZE: (u32, u32) = (1024, 768);
+
+/// How finely the faces are tessellated.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Tolerance {
+    /// Screen-space error in pixels, in [`default_view`].
+    PixelError(f64),
+    /// Absolute error in model units (millimetres for STEP).
+    Absolute(f64),
+}
+
+/// What [`assemble`] does.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExportOptions {
+    pub tolerance: Tolerance,
+    /// Written as the file's `asset.generator`.
+    pub generator: String,
+}
+
+impl Default for ExportOptions {
+    /// [`view::DEFAULT_PIXEL_ERROR`], generator `patchwork <version>`.
+    fn default() -> Self {
+        ExportOptions {
+            tolerance: Tolerance::PixelError(view::DEFAULT_PIXEL_ERROR),
+            generator: format!("patchwork {}", env!("CARGO_PKG_VERSION")),
+        }
+    }
+}
+
+/// Why a scene could not be assembled.
+#[derive(Debug, Error)]
+pub enum ExportError {
+    /// The tolerance is not a positive finite number.
+    #[error("the export tolerance must be a positive number, not {0:?}")]
+    Tolerance(Tolerance),
+}
+
+/// The view a [`Tolerance::PixelError`] is measured in: the scene framed from the default
+/// direction, [`view::DEFAULT_FOV_Y_DEG`], [`EXPORT_VIEW_SIZE`].
+pub fn default_view(scene: &Scene) -> View {
+    View::framing(
+        &scene.bounds,
+        scene.up.vector(),
+        view::DEFAULT_FOV_Y_DEG.to_radians(),
+        EXPORT_VIEW_SIZE,
+    )
+}
+
+/// Whether two patches draw the same surface (the same face placed twice).
+pub fn same_surface(a: &Patch, b: &Patch) -> bool {
+    match (&a.surface, &b.surface) {
+        (PatchSurface::Trimmed(x), PatchSurface::Trimmed(y)) => std::sync::Arc::ptr_eq(x, y),
+        _ => a.id == b.id,
+    }
+}
+
+/// The ε `p` is tessellated to, in its own (unplaced) units.
+fn face_eps(scene: &Scene, view: &View, p: &Patch, tolerance: Tolerance) -> f64 {
+    match tolerance {
+        Tolerance::Absolute(tol) => tol / p.scale(),
+        // The finest ε any placement of the face asks for.
+        Tolerance::PixelError(px) => scene
+            .patches
+            .iter()
+            .filter(|q| q.part == p.part && same_surface(q, p))
+            .map(|q| view.eps_obj(&q.bounds, px) / q.scale())
+            .fold(f64::INFINITY, f64::min),
+    }
+}
+
+/// Tessellates `scene` into meshes (one per shell) and nodes (one per placement); see the
+/// module documentation.
+pub fn assemble(scene: &Scene, opts: &ExportOptions) -> Result<ExportScene, ExportError> {
+    let (Tolerance::PixelError(t) | Tolerance::Absolute(t)) = opts.tolerance;
+    if !(t.is_finite() && t > 0.0) {
+        return Err(ExportError::Tolerance(opts.tolerance));
+    }
+    let view = default_view(scene);
+    let mut by_instance: Vec<Vec<&Patch>> = vec![Vec::new(); scene.instances.len()];
+    for p in &scene.patches {
+        if let Some(list) = by_instance.get_mut(p.instance as usize) {
+            list.push(p);
+        }
+    }
+    let mut meshes = Vec::new();
+    let mut mesh_of = HashMap::new();
+    let mut nodes = Vec::new();
+    let mut t = Tessellators::new();
+    for (index, (inst, patches)) in scene.instances.iter().zip(&by_instance).enumerate() {
+        if patches.is_empty() {
+            continue;
+        }
+        let part_name = scene
+            .parts
+            .get(inst.part as usize)
+            .map(|p| p.name.clone())
+            .unwrap_or_default();
+        let key = (inst.part, inst.shell);
+        let mesh = match mesh_of.get(&key) {
+            Some(&m) => m,
+            None => {
+                let mut mesh = ExportMesh {
+                    name: part_name.clone(),
+                    ..ExportMesh::default()
+                };
+                for p in patches {
+                    let eps = face_eps(scene, &view, p, opts.tolerance);
+                    let local = Patch {
+                        transform: DMat4::IDENTITY,
+                        ..(*p).clone()
+                    };
+                    let mut m = PatchMesh::default();
+                    t.patch(&local, eps, &mut m);
+                    let base = mesh.positions.len() as u32;
+                    mesh.positions
+                        .extend(m.positions.iter().map(|v| v.to_array()));
+                    mesh.normals.extend(m.normals.iter().map(|v| v.to_array()));
+                    mesh.indices
+                        .extend(m.triangles.iter().flatten().map(|i| base + i));
+                    if mesh.color.is_none() {
+                        mesh.color = p.color.map(|c| [c[0], c[1], c[2], 1.0]);
+                    }
+                }
+                mesh_of.insert(key, meshes.len());
+                meshes.push(mesh);
+                meshes.len() - 1
+            }
+        };
+        let name = match (inst.name.is_empty(), inst.shell) {
+            (false, _) => format!("{part_name} {}", inst.name),
+            (true, Some(shell)) => format!("{part_name} shell #{shell} {index}"),
+            (true, None) => format!("{part_name} {index}"),
+        };
+        nodes.push(ExportNode {
+            name,
+            mesh,
+            matrix: inst.transform.as_mat4().to_cols_array(),
+        });
+    }
+    Ok(ExportScene {
+        meshes,
+        nodes,
+        generator: opts.generator.clone(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn load(name: &str) -> Scene {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("models")
+            .join(name);
+        crate::io::load(&path).expect("model loads")
+    }
+
+    fn triangles(doc: &ExportScene) -> usize {
+        doc.meshes.iter().map(|m| m.indices.len() / 3).sum()
+    }
+
+    #[test]
+    fn teapot_is_one_mesh_placed_once() {
+        let scene = load("teapot.bpt");
+        let doc = assemble(&scene, &ExportOptions::default()).expect("assembles");
+        assert_eq!(doc.meshes.len(), scene.parts.len());
+        assert_eq!(doc.meshes.len(), 1);
+        assert_eq!(doc.nodes.len(), scene.instances.len());
+        assert_eq!(doc.nodes[0].mesh, 0);
+        assert_eq!(doc.nodes[0].matrix, crate::io::gltf_out::IDENTITY_MATRIX);
+        let m = &doc.meshes[0];
+        assert_eq!(m.normals.len(), m.positions.len());
+        assert_eq!(m.indices.len() % 3, 0);
+        assert!(m.indices.iter().all(|&i| (i as usize) < m.positions.len()));
+        assert!(doc.generator.starts_with("patchwork "));
+        // Every patch contributed triangles (32 patches, at least 2 each).
+        assert!(triangles(&doc) >= 64, "{}", triangles(&doc));
+    }
+
+    #[test]
+    fn finer_tolerance_gives_more_triangles() {
+        let scene = load("teapot.bpt");
+        let with = |tolerance| {
+            let opts = ExportOptions {
+                tolerance,
+                ..ExportOptions::default()
+            };
+            triangles(&assemble(&scene, &opts).expect("assembles"))
+        };
+        let coarse = with(Tolerance::Absolute(0.05));
+        let fine = with(Tolerance::Absolute(0.005));
+        assert!(fine > coarse, "{fine} ≤ {coarse}");
+        assert!(with(Tolerance::PixelError(4.0)) < with(Tolerance::PixelError(0.5)));
+    }
+
+    #[test]
+    fn assembly_shares_a_mesh_between_placements_of_a_shell() {
+        // 9 parts, 5 with geometry (rod, plate, bracket, bolt, nut), 18 placements.
+        let scene = load("as1-oc-214.stp");
+        let opts = ExportOptions {
+            tolerance: Tolerance::Absolute(0.5),
+            ..ExportOptions::default()
+        };
+        let doc = assemble(&scene, &opts).expect("assembles");
+        assert_eq!(doc.meshes.len(), 5);
+        assert_eq!(doc.nodes.len(), scene.instances.len());
+        assert_eq!(doc.nodes.len(), 18);
+        for (node, inst) in doc.nodes.iter().zip(&scene.instances) {
+            assert_eq!(node.matrix, inst.transform.as_mat4().to_cols_array());
+            let part = &scene.parts[inst.part as usize].name;
+            assert!(
+                node.name.starts_with(part.as_str()),
+                "{} / {part}",
+                node.name
+            );
+            assert_eq!(doc.meshes[node.mesh].name, *part);
+        }
+        // The same shell placed twice is the same mesh.
+        for (a, ia) in doc.nodes.iter().zip(&scene.instances) {
+            for (b, ib) in doc.nodes.iter().zip(&scene.instances) {
+                assert_eq!(
+                    a.mesh == b.mesh,
+                    (ia.part, ia.shell) == (ib.part, ib.shell),
+                    "{} / {}",
+                    a.name,
+                    b.name
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn bad_tolerance_is_an_error() {
+        let scene = load("teapot.bpt");
+        for tolerance in [
+            Tolerance::Absolute(0.0),
+            Tolerance::Absolute(-1.0),
+            Tolerance::PixelError(f64::NAN),
+            Tolerance::PixelError(f64::INFINITY),
+        ] {
+            let opts = ExportOptions {
+                tolerance,
+                ..ExportOptions::default()
+            };
+            assert!(matches!(
+                assemble(&scene, &opts),
+                Err(ExportError::Tolerance(_))
+            ));
+        }
+    }
+
+    #[test]
+    fn same_surface_is_the_same_face_or_patch() {
+        let scene = load("as1-oc-214.stp");
+        let p = &scene.patches;
+        assert!(same_surface(&p[0], &p[0]));
+        assert!(!same_surface(&p[0], &p[1]));
+        // A face placed twice: two patches, one surface.
+        let twice = p
+            .iter()
+            .enumerate()
+            .flat_map(|(i, a)| p[i + 1..].iter().map(move |b| (a, b)))
+            .find(|(a, b)| a.instance != b.instance && same_surface(a, b));
+        let (a, b) = twice.expect("a shell placed twice");
+        assert_ne!(a.id, b.id);
+        assert_eq!(a.part, b.part);
+    }
+}
