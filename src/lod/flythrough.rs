@@ -87,29 +87,6 @@ pub struct FrameRecord {
     pub crack_pixels_off: Option<usize>,
 }
 
-impl FrameRecord {
-    pub const CSV_HEADER: &'static str = "frame,frame_ms,tessellation_ms,retessellated,from_cache,queue_length,max_error_px,p99_error_px,triangles,pixel_error,crack_pixels,crack_pixels_off";
-
-    pub fn csv_row(&self) -> String {
-        format!(
-            "{},{:.3},{:.3},{},{},{},{:.4},{:.4},{},{:.4},{},{}",
-            self.frame,
-            self.frame_ms,
-            self.tessellation_ms,
-            self.retessellated,
-            self.from_cache,
-            self.queue_left,
-            self.max_error_px,
-            self.p99_error_px,
-            self.triangles,
-            self.pixel_error,
-            self.crack_pixels.map_or(String::new(), |c| c.to_string()),
-            self.crack_pixels_off
-                .map_or(String::new(), |c| c.to_string())
-        )
-    }
-}
-
 /// Summary of a run.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct FlythroughSummary {
@@ -223,121 +200,6 @@ pub fn summarize(records: &[FrameRecord], initial_ms: f64, jump_frame: usize) ->
     }
 }
 
-/// A plot of the run: top, screen error (max red, p99 orange, pixel error asked grey);
-/// bottom, frame time (blue) and re-tessellation time (green) with the budget (grey); the
-/// jump as a vertical black line. Scales: error 0..max(4 × pixel error, largest error), time
-/// 0..max(2 × budget, longest frame), both linear, marked by grid lines every quarter.
-pub fn plot(records: &[FrameRecord], budget_ms: f64, jump_frame: usize) -> image::RgbaImage {
-    let (w, h) = (900u32, 520u32);
-    let mut img = image::RgbaImage::from_pixel(w, h, image::Rgba([255, 255, 255, 255]));
-    let n = records.len().max(2);
-    let panel = |top: u32| (top + 10, top + 240);
-    let (err_top, err_bottom) = panel(0);
-    let (time_top, time_bottom) = panel(260);
-    let x_of = |i: usize| 40.0 + (w as f64 - 60.0) * i as f64 / (n - 1) as f64;
-    let pe = records.iter().map(|r| r.pixel_error).fold(0.0, f64::max);
-    let err_max = records
-        .iter()
-        .map(|r| r.max_error_px)
-        .fold(4.0 * pe, f64::max)
-        .max(1e-9);
-    let time_max = records
-        .iter()
-        .map(|r| r.frame_ms)
-        .fold(2.0 * budget_ms, f64::max)
-        .max(1e-9);
-    let y_in = |v: f64, max: f64, top: u32, bottom: u32| {
-        bottom as f64 - (bottom - top) as f64 * (v / max).clamp(0.0, 1.0)
-    };
-    let grey = image::Rgba([200, 200, 200, 255]);
-    for (top, bottom) in [(err_top, err_bottom), (time_top, time_bottom)] {
-        for q in 0..=4 {
-            let y = top as f64 + (bottom - top) as f64 * q as f64 / 4.0;
-            line(&mut img, (40.0, y), (w as f64 - 20.0, y), grey);
-        }
-        line(
-            &mut img,
-            (40.0, top as f64),
-            (40.0, bottom as f64),
-            image::Rgba([0, 0, 0, 255]),
-        );
-    }
-    let series = |img: &mut image::RgbaImage,
-                  f: &dyn Fn(&FrameRecord) -> f64,
-                  max: f64,
-                  (top, bottom): (u32, u32),
-                  color: [u8; 3]| {
-        for pair in records.windows(2) {
-            let a = (x_of(pair[0].frame), y_in(f(&pair[0]), max, top, bottom));
-            let b = (x_of(pair[1].frame), y_in(f(&pair[1]), max, top, bottom));
-            line(img, a, b, image::Rgba([color[0], color[1], color[2], 255]));
-        }
-    };
-    let dark = [110, 110, 110];
-    series(
-        &mut img,
-        &|r| r.pixel_error,
-        err_max,
-        (err_top, err_bottom),
-        dark,
-    );
-    series(
-        &mut img,
-        &|r| r.p99_error_px,
-        err_max,
-        (err_top, err_bottom),
-        [255, 150, 0],
-    );
-    series(
-        &mut img,
-        &|r| r.max_error_px,
-        err_max,
-        (err_top, err_bottom),
-        [220, 0, 0],
-    );
-    series(
-        &mut img,
-        &|_| budget_ms,
-        time_max,
-        (time_top, time_bottom),
-        dark,
-    );
-    series(
-        &mut img,
-        &|r| r.tessellation_ms,
-        time_max,
-        (time_top, time_bottom),
-        [0, 160, 0],
-    );
-    series(
-        &mut img,
-        &|r| r.frame_ms,
-        time_max,
-        (time_top, time_bottom),
-        [0, 70, 220],
-    );
-    let x = x_of(jump_frame);
-    line(
-        &mut img,
-        (x, err_top as f64),
-        (x, time_bottom as f64),
-        image::Rgba([0, 0, 0, 255]),
-    );
-    img
-}
-
-/// A 1-px line (DDA), clipped to the image.
-fn line(img: &mut image::RgbaImage, a: (f64, f64), b: (f64, f64), c: image::Rgba<u8>) {
-    let steps = ((b.0 - a.0).abs().max((b.1 - a.1).abs()).ceil() as usize).max(1);
-    for s in 0..=steps {
-        let t = s as f64 / steps as f64;
-        let (x, y) = (a.0 + (b.0 - a.0) * t, a.1 + (b.1 - a.1) * t);
-        if x >= 0.0 && y >= 0.0 && (x as u32) < img.width() && (y as u32) < img.height() {
-            img.put_pixel(x as u32, y as u32, c);
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -367,17 +229,5 @@ mod tests {
         assert_eq!(s.p99_frame_ms, 30.0);
         let never = summarize(&r[..3], 0.0, 1);
         assert_eq!(never.converge_ms, None);
-    }
-
-    #[test]
-    fn csv_rows_have_every_column() {
-        let cols = FrameRecord::CSV_HEADER.split(',').count();
-        let row = FrameRecord {
-            crack_pixels: Some(0),
-            ..record(3, 1.0, 0.2)
-        }
-        .csv_row();
-        assert_eq!(row.split(',').count(), cols);
-        assert!(row.starts_with("3,1.000,"));
     }
 }

@@ -2,8 +2,7 @@
 //! `patchwork implode` and `patchwork bench --flythrough`.
 //!
 //! Data in, text or numbers out; nothing here prints. Writing goes through
-//! [`crate::io::png::write_text`] (atomic). The flythrough's row format and plot stay with the
-//! frame loop (`lod::flythrough`); this module only assembles its table.
+//! [`crate::io::png::write_text`] (atomic).
 
 pub mod flythrough;
 pub mod implode;

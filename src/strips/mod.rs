@@ -238,4 +238,3 @@ pub fn arc_strips(h: &MtHierarchy, opts: &tunnel::TunnelOptions) -> (StripIndice
     starts.push(out.indices.len() as u32);
     (out, starts)
 }
-

@@ -178,7 +178,9 @@ fn mesh_patch(
     } else {
         let h = &m.hierarchy;
         let mut fresh = None;
-        let state = cut.unwrap_or(&mut fresh).get_or_insert_with(|| h.finest_cut());
+        let state = cut
+            .unwrap_or(&mut fresh)
+            .get_or_insert_with(|| h.finest_cut());
         h.move_cut(state, eps);
         let mut ranges = Vec::new();
         out.error = h.cut_ranges(state, &mut ranges);

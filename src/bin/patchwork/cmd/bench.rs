@@ -6,9 +6,9 @@ use std::path::PathBuf;
 use clap::Args;
 
 use patchwork::io::png;
-use patchwork::lod::flythrough::{FlythroughOptions, plot, run as run_flythrough};
+use patchwork::lod::flythrough::{FlythroughOptions, run as run_flythrough};
 use patchwork::render::Renderer;
-use patchwork::report::flythrough::{TargetSummary, frames_csv};
+use patchwork::report::flythrough::{TargetSummary, frames_csv, plot};
 use patchwork::strips::Join;
 use patchwork::view;
 
