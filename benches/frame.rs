@@ -35,7 +35,7 @@ const VARIANTS: [FatBorders; 4] = [
 
 fn bench_frame(c: &mut Criterion) {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("models/teapot.bpt");
-    let scene = patchwork::io::load(&path)
+    let scene = patchwork::prep::load(&path)
         .unwrap_or_else(|e| panic!("cannot load {}: {e}", path.display()));
     let up = scene.up.vector();
     let fov = DEFAULT_FOV_Y_DEG.to_radians();

@@ -14,7 +14,7 @@ use std::time::Instant;
 
 use glam::DVec3;
 use patchwork::geom::point_triangle_distance;
-use patchwork::model::{PatchSurface, Scene, UpAxis};
+use patchwork::model::{PatchSurface, UpAxis};
 use patchwork::tessellate::tessellate_scene;
 use patchwork::view::View;
 
@@ -132,12 +132,12 @@ fn main() {
     let original = Grid::new(&pos, &whole.triangles);
 
     let t = Instant::now();
-    let scene = Scene::from_mesh(
+    let scene = patchwork::prep::mesh_scene(
         whole.clone(),
-        patchwork::io::DEFAULT_PATCH_TRIANGLES,
+        patchwork::prep::DEFAULT_PATCH_TRIANGLES,
         0.0,
         UpAxis::Y,
-        || {},
+        &patchwork::prep::NoProgress,
     );
     let build = t.elapsed().as_secs_f64();
     let fov = 45f64.to_radians();

@@ -8,7 +8,7 @@
 //! (absolute and as a multiple of the tolerance); then a criterion group `step/ours` times our
 //! tessellation of each file at 1e-3 (criterion's arguments and filters apply to that group).
 //!
-//! * **ours**: `patchwork::io::load`, then `tessellate_scene_tolerance`, timed as the median of
+//! * **ours**: `patchwork::prep::load`, then `tessellate_scene_tolerance`, timed as the median of
 //!   [`OUR_RUNS`] runs; the error is the largest `PatchMesh::error` (each patch measures its own).
 //! * **truck**: `Table::from_step` → `to_compressed_shell` → `Shell::extract` →
 //!   `robust_triangulation(tol)` per shell, run in a child process (this executable with
@@ -141,7 +141,7 @@ fn bench_ours(c: &mut Criterion, files: &[PathBuf]) {
         .warm_up_time(Duration::from_millis(500))
         .measurement_time(Duration::from_secs(4));
     for path in files {
-        let scene = match patchwork::io::load(path) {
+        let scene = match patchwork::prep::load(path) {
             Ok(scene) => scene,
             Err(e) => {
                 eprintln!("step/ours: skipping {}: {e}", path.display());
@@ -366,7 +366,7 @@ mod ours_child {
             ]
         };
         let t = Instant::now();
-        let loaded = catch_unwind(|| patchwork::io::load(Path::new(file)));
+        let loaded = catch_unwind(|| patchwork::prep::load(Path::new(file)));
         let read_ms = t.elapsed().as_secs_f64() * 1e3;
         let mut row = base("ours-load");
         row.push(("read_ms", Value::Num(read_ms)));

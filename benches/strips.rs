@@ -146,7 +146,13 @@ fn main() {
     );
     eprintln!("bunny whole done");
     let t = Instant::now();
-    let fine = Scene::from_mesh(whole.clone(), 1500, 0.0, UpAxis::Y, || {});
+    let fine = patchwork::prep::mesh_scene(
+        whole.clone(),
+        1500,
+        0.0,
+        UpAxis::Y,
+        &patchwork::prep::NoProgress,
+    );
     let build_s = t.elapsed().as_secs_f64();
     let patches = mesh_patches(&fine);
     let pieces: Vec<Vec<[u32; 3]>> = patches.iter().map(|m| m.triangles.clone()).collect();
@@ -156,7 +162,7 @@ fn main() {
         ("teapot.bpt", "teapot (Bézier), ½ px"),
         ("as1-oc-214.stp", "as1 (trimmed NURBS), ½ px"),
     ] {
-        let scene = patchwork::io::load(&root.join("models").join(file)).expect("model");
+        let scene = patchwork::prep::load(&root.join("models").join(file)).expect("model");
         let v = View::framing(&scene.bounds, scene.up.vector(), fov, (1024, 768));
         let meshes = patchwork::tessellate::tessellate_scene(&scene, &v, view::DEFAULT_PIXEL_ERROR);
         let pieces: Vec<Vec<[u32; 3]>> = meshes
@@ -243,12 +249,12 @@ fn main() {
     }
 
     // 3. Per resolution: what each option sends.
-    let scene = Scene::from_mesh(
+    let scene = patchwork::prep::mesh_scene(
         whole.clone(),
         1500,
         patchwork::mt::DEFAULT_ARC_SIZE,
         UpAxis::Y,
-        || {},
+        &patchwork::prep::NoProgress,
     );
     let patches = mesh_patches(&scene);
     let t = Instant::now();

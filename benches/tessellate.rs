@@ -23,7 +23,7 @@ const SIZE: (u32, u32) = (1024, 768);
 
 fn setup() -> (Scene, View) {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("models/teapot.bpt");
-    let scene = patchwork::io::load(&path)
+    let scene = patchwork::prep::load(&path)
         .unwrap_or_else(|e| panic!("cannot load {}: {e}", path.display()));
     let view = View::framing(
         &scene.bounds,

@@ -22,7 +22,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Some((w, h)) => (w.parse()?, h.parse()?),
         None => (512, 384),
     };
-    let scene = patchwork::io::load(std::path::Path::new(file))?;
+    let scene = patchwork::prep::load(std::path::Path::new(file))?;
     let view = random_view(
         &scene,
         seed.parse()?,

@@ -4,8 +4,7 @@ fn main() {
     let path = std::env::args().nth(1).unwrap_or("models/bunny.glb".into());
     let mut mesh = patchwork::io::mesh::read_gltf(std::path::Path::new(&path)).expect("loads");
     mesh.weld();
-    let mut parts =
-        patchwork::model::mesh::partition(&mesh, patchwork::io::DEFAULT_PATCH_TRIANGLES);
+    let mut parts = patchwork::prep::partition(&mesh, patchwork::prep::DEFAULT_PATCH_TRIANGLES);
     let t = std::time::Instant::now();
     for p in parts.iter_mut() {
         p.build_hierarchy(0.0);

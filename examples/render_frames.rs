@@ -19,7 +19,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let msaa: u32 = msaa.parse()?;
     let frames: usize = frames.parse()?;
     let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("models/teapot.bpt");
-    let scene = patchwork::io::load(&model)?;
+    let scene = patchwork::prep::load(&model)?;
     let fov = DEFAULT_FOV_Y_DEG.to_radians();
     let view = View::framing(&scene.bounds, scene.up.vector(), fov, (1024, 768));
     let meshes = tessellate_scene(&scene, &view, DEFAULT_PIXEL_ERROR);

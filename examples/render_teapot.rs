@@ -14,7 +14,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .nth(1)
         .map_or_else(|| PathBuf::from("teapot.png"), PathBuf::from);
     let model = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("models/teapot.bpt");
-    let scene = patchwork::io::load(&model)?;
+    let scene = patchwork::prep::load(&model)?;
     let view = View::framing(
         &scene.bounds,
         scene.up.vector(),

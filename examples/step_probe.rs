@@ -6,7 +6,7 @@ use patchwork::tessellate::tessellate_scene_tolerance;
 fn main() {
     for path in std::env::args().skip(1) {
         let t = std::time::Instant::now();
-        let scene = match patchwork::io::load(std::path::Path::new(&path)) {
+        let scene = match patchwork::prep::load(std::path::Path::new(&path)) {
             Ok(s) => s,
             Err(e) => {
                 println!("{e}");

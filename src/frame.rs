@@ -1,5 +1,5 @@
 //! One frame of the LOD loop — the only implementation, driven by the viewer, `bench
-//! --flythrough` ([`crate::lod::flythrough`]) and `implode` ([`crate::anim`]).
+//! --flythrough` ([`crate::drive::flythrough`]) and `implode` ([`crate::drive::implode`]).
 //!
 //! Balázs, Guthe and Klein, "Fat Borders" (2004), §4.2: per frame, update the level of detail
 //! within the time budget ([`FrameLoop::update`]), upload what changed, draw surfaces and fat

@@ -10,6 +10,8 @@
 
 pub mod anim;
 pub mod check;
+pub mod drive;
+pub mod export;
 pub mod frame;
 pub mod geom;
 pub mod io;
@@ -17,6 +19,7 @@ pub mod isolate;
 pub mod lod;
 pub mod model;
 pub mod mt;
+pub mod prep;
 pub mod render;
 pub mod report;
 pub mod strips;

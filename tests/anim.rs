@@ -4,9 +4,10 @@
 mod common;
 
 use glam::DVec3;
-use patchwork::anim::{AnimOptions, AnimRecord, Explosion, GroupBy, run};
+use patchwork::anim::{Explosion, GroupBy};
 use patchwork::check::crack::contour_margin;
 use patchwork::check::golden::{GoldenOutcome, Thresholds, compare_with_golden};
+use patchwork::drive::implode::{AnimOptions, AnimRecord, run};
 use patchwork::view::{self, View};
 
 /// The fixed camera of an animation: framing the whole flight.
@@ -127,7 +128,7 @@ fn assembly_implosion_by_parts_is_crack_free_in_every_frame() {
             r.frame
         );
     }
-    assert!(patchwork::anim::frames_pass(
+    assert!(patchwork::drive::implode::frames_pass(
         &records,
         GroupBy::Parts,
         18,
@@ -164,7 +165,7 @@ fn teapot_implosion_by_patches_closes_crack_free_with_bounded_growth() {
             r.frame
         );
     }
-    assert!(patchwork::anim::frames_pass(
+    assert!(patchwork::drive::implode::frames_pass(
         &records,
         GroupBy::Patches,
         scene.patches.len(),

@@ -4,10 +4,11 @@
 use std::io::ErrorKind;
 use std::path::{Path, PathBuf};
 
+use patchwork::io::LoadError;
 use patchwork::io::bpt::parse;
-use patchwork::io::{LoadError, load};
 use patchwork::model::UpAxis;
 use patchwork::model::bezier::PatchError;
+use patchwork::prep::load;
 use proptest::prelude::*;
 
 fn bad(name: &str) -> PathBuf {

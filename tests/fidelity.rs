@@ -167,7 +167,7 @@ fn seams_are_not_boundaries() {
 /// still cut it, not fill it; the measure sees the difference.
 #[test]
 fn a_hole_a_period_away_is_cut() {
-    let scene = patchwork::io::load(&common::root().join("models/corpus/linkrods.step.gz"))
+    let scene = patchwork::prep::load(&common::root().join("models/corpus/linkrods.step.gz"))
         .expect("linkrods loads");
     let p = scene
         .patches

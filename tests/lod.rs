@@ -7,8 +7,8 @@ mod common;
 
 use std::time::Duration;
 
+use patchwork::drive::flythrough::{FlythroughOptions, run};
 use patchwork::lod::LodOptions;
-use patchwork::lod::flythrough::{FlythroughOptions, run};
 
 fn options(frames: usize, budget: Duration) -> FlythroughOptions {
     FlythroughOptions {

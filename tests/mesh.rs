@@ -6,9 +6,10 @@ mod common;
 use std::path::PathBuf;
 
 use glam::Vec3;
-use patchwork::io::{LoadError, load};
+use patchwork::io::LoadError;
 use patchwork::model::PatchSurface;
 use patchwork::model::mesh::MeshPatch;
+use patchwork::prep::load;
 
 /// The bunny, loaded once (its 99 hierarchies take a few seconds to build).
 fn bunny() -> &'static patchwork::model::Scene {

@@ -6,8 +6,9 @@ mod common;
 use std::path::Path;
 
 use patchwork::check::{CheckOptions, run_check};
-use patchwork::io::{LoadError, load};
+use patchwork::io::LoadError;
 use patchwork::model::{PatchSurface, Scene};
+use patchwork::prep::load;
 use patchwork::render::FatBorders;
 use patchwork::tessellate::{tessellate_scene_tolerance, tessellate_scene_with};
 
@@ -21,7 +22,7 @@ const CLOSED: [&str; 5] = [
 ];
 
 fn parse(text: &str) -> Result<Scene, LoadError> {
-    patchwork::io::step::parse(text.as_bytes(), Path::new("test.step"))
+    patchwork::prep::step::parse(text.as_bytes(), Path::new("test.step"))
 }
 
 #[test]
@@ -375,7 +376,7 @@ fn empty_and_faceless_files_are_clear_errors() {
         Err(LoadError::Parse { .. })
     ));
     assert!(matches!(
-        patchwork::io::step::parse(b"ISO-10303-21;\0", Path::new("x.stp")),
+        patchwork::prep::step::parse(b"ISO-10303-21;\0", Path::new("x.stp")),
         Err(LoadError::NotText { .. })
     ));
 }
@@ -421,7 +422,7 @@ fn truncated_files_never_panic() {
     let text = std::fs::read(common::root().join("models/screw.step")).expect("model");
     for k in 1..40 {
         let cut = text.len() * k / 40;
-        let r = patchwork::io::step::parse(&text[..cut], Path::new("cut.step"));
+        let r = patchwork::prep::step::parse(&text[..cut], Path::new("cut.step"));
         assert!(r.is_err(), "a file cut at byte {cut} must be refused");
     }
 }

@@ -1,14 +1,14 @@
 //! Triangle-mesh readers: glTF 2.0 (`.glb`, `.gltf`; every mesh primitive of every node in
 //! the default scene, node transforms applied) with the `gltf` crate, and Wavefront OBJ with
 //! `tobj`, PLY with `ply-rs`. The result is welded into one world-space [`TriMesh`] and split into patches
-//! ([`crate::model::mesh::partition`]).
+//! ([`crate::prep::partition`]).
 
 use std::path::Path;
 
 use glam::{Mat4, Vec3};
 
 use super::LoadError;
-use crate::model::mesh::TriMesh;
+pub use crate::model::mesh::TriMesh;
 
 /// Appends the triangles of a primitive, checking indices and positions.
 fn append(

@@ -1,4 +1,5 @@
-//! Readers: files → [`crate::model::Scene`].
+//! Readers (files → [`Model`], prepared into a [`crate::model::Scene`] by [`crate::prep`])
+//! and writers (PNG, glTF, depth).
 //!
 //! [`load`] picks the reader by file extension (case-insensitive):
 //!
@@ -15,7 +16,6 @@
 
 pub mod bpt;
 pub mod depth;
-pub mod export;
 pub mod gltf_out;
 pub mod mesh;
 pub mod png;
@@ -24,12 +24,11 @@ pub mod step;
 use std::path::{Path, PathBuf};
 
 use crate::model::bezier::PatchError;
-use crate::model::{Scene, UpAxis};
 
 /// Why a model file could not be loaded.
 ///
 /// Lines are 1-based; patch and control-point numbers are 0-based indices, as in
-/// [`Scene::patches`] (patch `id`) and [`PatchError`].
+/// [`crate::model::Scene::patches`] (patch `id`) and [`PatchError`].
 #[derive(Debug, thiserror::Error)]
 pub enum LoadError {
     /// The file could not be read at all (missing, a directory, no permission…).
@@ -117,22 +116,6 @@ impl LoadError {
     }
 }
 
-/// A progress bar on a terminal for long loads (`n` ≥ 20 steps), hidden otherwise (and
-/// indicatif draws nothing when stderr is not a terminal).
-pub(crate) fn progress(n: usize, what: &str) -> indicatif::ProgressBar {
-    if n < 20 {
-        return indicatif::ProgressBar::hidden();
-    }
-    let pb = indicatif::ProgressBar::new(n as u64);
-    pb.set_style(
-        indicatif::ProgressStyle::with_template(&format!(
-            "{{bar:40}} {{pos}}/{{len}} {what} {{elapsed}}"
-        ))
-        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-    );
-    pb
-}
-
 /// Most bytes a compressed model may expand to.
 pub const MAX_GUNZIPPED_BYTES: u64 = 4 << 30;
 
@@ -160,14 +143,21 @@ fn read_gzip(path: &Path) -> Result<Vec<u8>, LoadError> {
     Ok(bytes)
 }
 
-/// Triangles per patch when a mesh is split into patches (the 1–2 k).
-pub const DEFAULT_PATCH_TRIANGLES: usize = 1500;
+/// What a model file holds, before load-time preparation ([`crate::prep`]).
+#[derive(Debug)]
+pub enum Model {
+    /// Bézier patches (`.bpt`, z-up).
+    Bezier(Vec<crate::model::BezierPatch>),
+    /// A triangle mesh in world coordinates (`.glb`, `.gltf`, `.obj`, `.ply`, y-up).
+    Mesh(mesh::TriMesh),
+    /// A STEP file's faces and product structure (`.step`, `.stp`, also gzipped).
+    Step(Box<step::StepModel>),
+}
 
-/// Loads a model, choosing the reader by the file's extension (case-insensitive).
-///
-/// `.bpt` files (Newell's teaset format, z-up) give a scene with [`UpAxis::Z`]; any other
-/// extension is [`LoadError::UnsupportedFormat`].
-pub fn load(path: &Path) -> Result<Scene, LoadError> {
+/// Reads a model, choosing the reader by the file's extension (case-insensitive); any other
+/// extension is [`LoadError::UnsupportedFormat`]. [`crate::prep::load`] turns it into a
+/// scene.
+pub fn read(path: &Path) -> Result<Model, LoadError> {
     let extension = path
         .extension()
         .map(|e| e.to_string_lossy().into_owned())
@@ -178,7 +168,7 @@ pub fn load(path: &Path) -> Result<Scene, LoadError> {
             .map(|e| e.to_string_lossy().into_owned())
             .unwrap_or_default();
         if inner.eq_ignore_ascii_case("step") || inner.eq_ignore_ascii_case("stp") {
-            return step::parse(&read_gzip(path)?, path);
+            return Ok(Model::Step(Box::new(step::read(&read_gzip(path)?, path)?)));
         }
         return Err(LoadError::UnsupportedFormat {
             path: path.to_path_buf(),
@@ -186,36 +176,19 @@ pub fn load(path: &Path) -> Result<Scene, LoadError> {
         });
     }
     if extension.eq_ignore_ascii_case("bpt") {
-        let patches = bpt::read(path)?;
-        Ok(Scene::from_bezier(patches, UpAxis::Z))
+        Ok(Model::Bezier(bpt::read(path)?))
     } else if extension.eq_ignore_ascii_case("step") || extension.eq_ignore_ascii_case("stp") {
         let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
             path: path.to_path_buf(),
             source,
         })?;
-        step::parse(&bytes, path)
-    } else if ["glb", "gltf", "obj", "ply"]
-        .iter()
-        .any(|e| extension.eq_ignore_ascii_case(e))
-    {
-        let mesh = if extension.eq_ignore_ascii_case("obj") {
-            mesh::read_obj(path)?
-        } else if extension.eq_ignore_ascii_case("ply") {
-            mesh::read_ply(path)?
-        } else {
-            mesh::read_gltf(path)?
-        };
-        let patches = mesh.triangles.len().div_ceil(DEFAULT_PATCH_TRIANGLES);
-        let pb = progress(patches, "patch hierarchies");
-        let scene = Scene::from_mesh(
-            mesh,
-            DEFAULT_PATCH_TRIANGLES,
-            crate::mt::DEFAULT_ARC_SIZE,
-            UpAxis::Y,
-            || pb.inc(1),
-        );
-        pb.finish_and_clear();
-        Ok(scene)
+        Ok(Model::Step(Box::new(step::read(&bytes, path)?)))
+    } else if extension.eq_ignore_ascii_case("obj") {
+        Ok(Model::Mesh(mesh::read_obj(path)?))
+    } else if extension.eq_ignore_ascii_case("ply") {
+        Ok(Model::Mesh(mesh::read_ply(path)?))
+    } else if extension.eq_ignore_ascii_case("glb") || extension.eq_ignore_ascii_case("gltf") {
+        Ok(Model::Mesh(mesh::read_gltf(path)?))
     } else {
         Err(LoadError::UnsupportedFormat {
             path: path.to_path_buf(),

@@ -25,8 +25,6 @@
 //! **Frame-rate target** (Pajon, after Funkhouser and Séquin's benefit/cost): see
 //! [`PixelErrorController`].
 
-pub mod flythrough;
-
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 

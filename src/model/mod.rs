@@ -205,7 +205,7 @@ impl Scene {
     }
 
     /// A scene of one unnamed part, its bounds from the patches'.
-    fn single_part(
+    pub fn single_part(
         patches: Vec<Patch>,
         up: UpAxis,
         bbox: (DVec3, DVec3),
@@ -229,49 +229,6 @@ impl Scene {
             skipped: Vec::new(),
             warnings,
         }
-    }
-
-    /// Builds a scene from a triangle mesh: welded, split into patches of about
-    /// `patch_triangles` triangles ([`mesh::partition`]), each with its MT hierarchy reduced
-    /// to `arc_size` triangles per arc (built on rayon; `on_patch` is called as each is done,
-    /// for progress).
-    pub fn from_mesh(
-        mut m: mesh::TriMesh,
-        patch_triangles: usize,
-        arc_size: f64,
-        up: UpAxis,
-        on_patch: impl Fn() + Sync,
-    ) -> Scene {
-        let dropped = m.weld();
-        let mut warnings = Vec::new();
-        if dropped > 0 {
-            warnings.push(format!(
-                "{dropped} degenerate triangles dropped after welding"
-            ));
-        }
-        let bbox = box_of(m.positions.iter().map(|p| p.as_dvec3())).unwrap_or_default();
-        let mut parts = mesh::partition(&m, patch_triangles);
-        {
-            use rayon::prelude::*;
-            parts.par_iter_mut().for_each(|p| {
-                p.build_hierarchy(arc_size);
-                on_patch();
-            });
-        }
-        let patches: Vec<Patch> = parts
-            .into_iter()
-            .enumerate()
-            .map(|(i, p)| Patch {
-                id: i as u32,
-                bounds: Sphere::around(p.positions.iter().map(|v| v.as_dvec3())),
-                surface: PatchSurface::Mesh(Arc::new(p)),
-                transform: DMat4::IDENTITY,
-                part: 0,
-                color: None,
-                instance: 0,
-            })
-            .collect();
-        Scene::single_part(patches, up, bbox, warnings)
     }
 
     /// Length of the diagonal of [`Scene::bbox`].

@@ -1,7 +1,7 @@
 //! The per-frame table and the frame-rate-target figures of `bench --flythrough`
-//! (`lod::flythrough::run`'s records): CSV rows and the plot.
+//! (`drive::flythrough::run`'s records): CSV rows and the plot.
 
-use crate::lod::flythrough::FrameRecord;
+use crate::drive::flythrough::FrameRecord;
 
 /// Columns of the per-frame table.
 pub const CSV_HEADER: &str = "frame,frame_ms,tessellation_ms,retessellated,from_cache,queue_length,max_error_px,p99_error_px,triangles,pixel_error,crack_pixels,crack_pixels_off";

@@ -1,8 +1,8 @@
-//! `frames.csv` and the summary line of an implosion / explosion (`anim::run`'s records).
+//! `frames.csv` and the summary line of an implosion / explosion (`drive::implode::run`'s records).
 
 use std::path::Path;
 
-use crate::anim::AnimRecord;
+use crate::drive::implode::AnimRecord;
 use crate::io::png::{self, WriteError};
 
 /// The header of `frames.csv`; one row per frame follows.

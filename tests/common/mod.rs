@@ -15,13 +15,13 @@ pub fn root() -> PathBuf {
 
 pub fn teapot() -> Scene {
     let path = root().join("models/teapot.bpt");
-    patchwork::io::load(&path).unwrap_or_else(|e| panic!("cannot load the teapot: {e}"))
+    patchwork::prep::load(&path).unwrap_or_else(|e| panic!("cannot load the teapot: {e}"))
 }
 
 /// A model shipped in `models/`.
 pub fn load(name: &str) -> Scene {
     let path = root().join("models").join(name);
-    patchwork::io::load(&path).unwrap_or_else(|e| panic!("cannot load {name}: {e}"))
+    patchwork::prep::load(&path).unwrap_or_else(|e| panic!("cannot load {name}: {e}"))
 }
 
 /// A renderer on whatever adapter exists. Tests that render must fail — not skip — when

@@ -10,9 +10,9 @@ use glam::DVec3;
 use thiserror::Error;
 
 use patchwork::check::CheckError;
+use patchwork::export::ExportError;
 use patchwork::io::LoadError;
 use patchwork::io::depth::DepthError;
-use patchwork::io::export::ExportError;
 use patchwork::io::gltf_out::GltfWriteError;
 use patchwork::io::png::WriteError;
 use patchwork::render::RenderError;

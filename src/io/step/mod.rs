@@ -20,9 +20,7 @@ use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
 use std::sync::Arc;
 
-use glam::{DMat4, DVec3};
-use indicatif::ProgressBar;
-use rayon::prelude::*;
+use glam::DVec3;
 use truck_stepio::r#in::alias::re_exports::Point3;
 use truck_stepio::r#in::ruststep::ast::Name;
 use truck_stepio::r#in::ruststep::tables::{IntoOwned, PlaceHolder};
@@ -31,11 +29,7 @@ use truck_stepio::r#in::{CurveAnyHolder, EdgeCurve, EdgeCurveHolder, FaceSurface
 use super::LoadError;
 use crate::isolate::isolated;
 use crate::model::trimmed::{LoopEdge, TrimEdge, TruckSurface, to_dvec};
-use crate::model::{
-    Instance, Part, Patch, PatchSurface, Scene, SkippedFace, Sphere, TrimmedFace, UpAxis,
-    bounding_box, transform_scale,
-};
-use crate::tessellate::{PatchMesh, TrimmedTessellator};
+use crate::model::{Sphere, TrimmedFace};
 
 /// How far (relative to the coordinates' size) an edge's vertices may lie from its curve.
 const EDGE_VERTEX_TOLERANCE: f64 = 1e-4;
@@ -45,11 +39,21 @@ const LOOSE_UNCERTAINTY_FACTOR: f64 = 10.0;
 /// ... or within this fraction of the edge's chord.
 const LOOSE_EDGE_FRACTION: f64 = 0.02;
 
-/// Coarse tolerance of the load-time tessellation, relative to a face's edge extent.
-const PROBE_TOLERANCE: f64 = 0.02;
+/// A STEP file read: every face of the shells used, converted (not yet probed: see
+/// [`crate::prep::step`]), with the product structure that places them.
+#[derive(Debug)]
+pub struct StepModel {
+    pub path: std::path::PathBuf,
+    pub structure: structure::Structure,
+    /// Every face of the shells used, by entity id: converted, or why not.
+    pub faces: Vec<(u64, Result<TrimmedFace, String>)>,
+    /// Face entity ids per shell entity id.
+    pub shell_faces: HashMap<u64, Vec<u64>>,
+    pub warnings: Vec<String>,
+}
 
-/// Reads a STEP file from bytes (`path` is for messages).
-pub fn parse(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
+/// Reads a STEP file from bytes (`path` is for messages): its structure and faces.
+pub fn read(bytes: &[u8], path: &Path) -> Result<StepModel, LoadError> {
     let p = || path.to_path_buf();
     if bytes.iter().all(u8::is_ascii_whitespace) {
         return Err(LoadError::Empty { path: p() });
@@ -171,122 +175,11 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
         ));
     }
 
-    // Probe tessellation: bounds, and faces that cannot be trimmed.
-    let pb = progress(converted.len(), "faces");
-    let probed: Vec<(u64, Result<Probed, String>)> = converted
-        .into_par_iter()
-        .map_init(TrimmedTessellator::new, |t, (id, r)| {
-            let out = r.and_then(|mut face| {
-                let (bounds, bbox) = probe(t, &face)?;
-                face.bounds = bounds;
-                Ok((face, bbox))
-            });
-            pb.inc(1);
-            (id, out)
-        })
-        .collect();
-    pb.finish_and_clear();
-
-    let mut faces: HashMap<u64, (Arc<TrimmedFace>, (DVec3, DVec3))> = HashMap::new();
-    let mut skipped = Vec::new();
-    for (id, r) in probed {
-        match r {
-            Ok((face, bbox)) => {
-                faces.insert(id, (Arc::new(face), bbox));
-            }
-            Err(reason) => skipped.push(SkippedFace { face: id, reason }),
-        }
-    }
-
-    let parts: Vec<Part> = structure
-        .parts
-        .iter()
-        .map(|p| Part {
-            name: p.name.clone(),
-        })
-        .collect();
-    // Scenes are in millimetres (the CAD default); files in other units are scaled.
-    let unit = structure
-        .length_unit_mm
-        .filter(|u| u.is_finite() && *u > 0.0)
-        .unwrap_or(1.0);
-    if unit != 1.0 {
-        warnings.push(format!("length unit is {unit} mm: scaled to millimetres"));
-    }
-    let mut patches = Vec::new();
-    let mut corners = Vec::new();
-    let mut instances = Vec::new();
-    for inst in &structure.instances {
-        let transform = DMat4::from_scale(DVec3::splat(unit)) * inst.transform;
-        let scale = transform_scale(&transform);
-        let instance = instances.len() as u32;
-        instances.push(Instance {
-            name: inst.instance_name.clone(),
-            part: inst.part as u32,
-            transform,
-            shell: Some(inst.shell),
-        });
-        for fid in face_ids.get(&inst.shell).into_iter().flatten() {
-            let Some((face, (lo, hi))) = faces.get(fid) else {
-                continue;
-            };
-            let color = structure
-                .colors
-                .get(fid)
-                .or_else(|| structure.colors.get(&inst.shell))
-                .or_else(|| inst.solid.and_then(|s| structure.colors.get(&s)))
-                .copied();
-            let bounds = Sphere {
-                center: transform.transform_point3(face.bounds.center),
-                radius: face.bounds.radius * scale,
-            };
-            for k in 0..8 {
-                let c = DVec3::new(
-                    if k & 1 == 0 { lo.x } else { hi.x },
-                    if k & 2 == 0 { lo.y } else { hi.y },
-                    if k & 4 == 0 { lo.z } else { hi.z },
-                );
-                corners.push(transform.transform_point3(c));
-            }
-            patches.push(Patch {
-                id: patches.len() as u32,
-                surface: PatchSurface::Trimmed(face.clone()),
-                transform,
-                bounds,
-                part: inst.part as u32,
-                color,
-                instance,
-            });
-        }
-    }
-    if patches.is_empty() {
-        let first: Vec<String> = skipped
-            .iter()
-            .take(3)
-            .map(|s| format!("#{}: {}", s.face, s.reason))
-            .collect();
-        return Err(LoadError::NoFaces {
-            path: p(),
-            reason: if skipped.is_empty() {
-                "its shells have no faces".to_owned()
-            } else {
-                format!(
-                    "none of its {} faces could be used ({})",
-                    skipped.len(),
-                    first.join("; ")
-                )
-            },
-        });
-    }
-    let spheres: Vec<Sphere> = patches.iter().map(|p| p.bounds).collect();
-    Ok(Scene {
-        bounds: Sphere::union(&spheres),
-        bbox: bounding_box(corners).unwrap_or_default(),
-        patches,
-        up: UpAxis::Z,
-        parts,
-        instances,
-        skipped,
+    Ok(StepModel {
+        path: p(),
+        structure,
+        faces: converted,
+        shell_faces: face_ids,
         warnings,
     })
 }
@@ -353,17 +246,6 @@ fn untrim_swept_curves(table: &mut Table, file: &p21::P21File) {
             s.swept_curve = PlaceHolder::Ref(Name::Entity(b));
         }
     }
-}
-
-/// A face with its bounding box (own coordinates).
-type Probed = (TrimmedFace, (DVec3, DVec3));
-
-/// A progress bar on a terminal for long loads (≥ 200 faces), hidden otherwise.
-fn progress(n: usize, what: &str) -> ProgressBar {
-    if n < 200 {
-        return ProgressBar::hidden();
-    }
-    super::progress(n, what)
 }
 
 /// Face entity ids of a shell (`CLOSED_SHELL(name, (faces…))`, also `OPEN_SHELL`,
@@ -670,25 +552,4 @@ fn holder_ref<T>(p: &PlaceHolder<T>) -> Option<u64> {
         PlaceHolder::Ref(Name::Entity(id)) => Some(*id),
         _ => None,
     }
-}
-
-/// Coarse tessellation of a face: its bounding sphere (grown by the error) and box.
-fn probe(
-    t: &mut TrimmedTessellator,
-    face: &TrimmedFace,
-) -> Result<(Sphere, (DVec3, DVec3)), String> {
-    let tol = (face.bounds.radius * PROBE_TOLERANCE).max(1e-9);
-    let mut mesh = PatchMesh::default();
-    isolated(|| t.tessellate(face, tol, &mut mesh))?.map_err(|e| e.to_string())?;
-    let pts = mesh.positions.iter().map(|p| p.as_dvec3());
-    let s = Sphere::around(pts.clone());
-    let (lo, hi) = bounding_box(pts).ok_or("no vertices")?;
-    let grow = mesh.error + tol;
-    Ok((
-        Sphere {
-            center: s.center,
-            radius: s.radius + grow,
-        },
-        (lo - DVec3::splat(grow), hi + DVec3::splat(grow)),
-    ))
 }

@@ -5,8 +5,8 @@ use std::path::PathBuf;
 
 use clap::Args;
 
+use patchwork::drive::flythrough::{FlythroughOptions, run as run_flythrough};
 use patchwork::io::png;
-use patchwork::lod::flythrough::{FlythroughOptions, run as run_flythrough};
 use patchwork::render::Renderer;
 use patchwork::report::flythrough::{TargetSummary, frames_csv, plot};
 use patchwork::strips::Join;

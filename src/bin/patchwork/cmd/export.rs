@@ -1,11 +1,11 @@
 //! `patchwork export`: the tessellation as binary glTF (assembled by
-//! `patchwork::io::export::assemble`, written by `io::gltf_out::write_glb`).
+//! `patchwork::export::assemble`, written by `io::gltf_out::write_glb`).
 
 use std::path::PathBuf;
 
 use clap::Args;
 
-use patchwork::io::export::{ExportOptions, Tolerance, assemble};
+use patchwork::export::{ExportOptions, Tolerance, assemble};
 use patchwork::io::gltf_out::write_glb;
 use patchwork::view;
 

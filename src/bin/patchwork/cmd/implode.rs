@@ -7,8 +7,9 @@ use std::process::{Command, Stdio};
 
 use clap::Args;
 
-use patchwork::anim::{
-    AnimOptions, Explosion, GroupBy, frames_pass, growth_within_bound, run as run_animation,
+use patchwork::anim::{Explosion, GroupBy};
+use patchwork::drive::implode::{
+    AnimOptions, frames_pass, growth_within_bound, run as run_animation,
 };
 use patchwork::io::png;
 use patchwork::render::Renderer;

@@ -20,7 +20,7 @@ use crate::error::CliError;
 
 /// Loads a model and tells the user (stderr) what was left out and why.
 pub fn load(path: &Path) -> Result<Scene, CliError> {
-    let scene = patchwork::io::load(path)?;
+    let scene = patchwork::prep::load_with(path, &Bar::default())?;
     for w in &scene.warnings {
         eprintln!("warning: {}: {w}", path.display());
     }
@@ -59,4 +59,28 @@ pub fn progress(n: usize, what: &str) -> ProgressBar {
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     pb
+}
+
+/// Load progress drawn as a bar on stderr (indicatif draws nothing when stderr is not a
+/// terminal); the library reports, the binary draws.
+#[derive(Debug, Default)]
+struct Bar(std::sync::Mutex<Option<ProgressBar>>);
+
+impl patchwork::prep::Progress for Bar {
+    fn begin(&self, what: &str, total: usize) {
+        let mut slot = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        *slot = Some(progress(total, what));
+    }
+
+    fn advance(&self) {
+        if let Some(pb) = self.0.lock().unwrap_or_else(|e| e.into_inner()).as_ref() {
+            pb.inc(1);
+        }
+    }
+
+    fn end(&self) {
+        if let Some(pb) = self.0.lock().unwrap_or_else(|e| e.into_inner()).take() {
+            pb.finish_and_clear();
+        }
+    }
 }

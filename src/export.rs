@@ -1,6 +1,6 @@
 //! A scene's tessellation, assembled for export: one mesh per shell, one node per placement.
 //!
-//! [`assemble`] turns a [`Scene`] into the [`ExportScene`] that [`super::gltf_out`] writes:
+//! [`assemble`] turns a [`Scene`] into the [`ExportScene`] that [`crate::io::gltf_out`] writes:
 //! - one node per placed solid / shell ([`Scene::instances`]) that has patches, named after its
 //!   part and occurrence, with the instance's transform;
 //! - one mesh per shell (per part outside STEP: the key is `(part, shell)`), tessellated once in
@@ -20,7 +20,7 @@ use std::collections::HashMap;
 use glam::DMat4;
 use thiserror::Error;
 
-use super::gltf_out::{ExportMesh, ExportNode, ExportScene};
+use crate::io::gltf_out::{ExportMesh, ExportNode, ExportScene};
 use crate::model::{Patch, PatchSurface, Scene};
 use crate::tessellate::{PatchMesh, Tessellators};
 use crate::view::{self, View};
@@ -180,7 +180,7 @@ mod tests {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("models")
             .join(name);
-        crate::io::load(&path).expect("model loads")
+        crate::prep::load(&path).expect("model loads")
     }
 
     fn triangles(doc: &ExportScene) -> usize {
