@@ -256,7 +256,7 @@ impl BorderGeometry {
         let mut g = BorderGeometry::default();
         for m in meshes {
             let eps = m.eps_border() as f32;
-            let color = super::packed_color(m.color);
+            let color = super::upload::packed_color(m.color);
             for ring in &m.borders {
                 let n = ring.len();
                 let base = g.vertices.len() as u32;

@@ -1,0 +1,246 @@
+//! One frame: surfaces, then the fat borders of every border vertex, into the targets.
+
+use super::*;
+use super::{pipelines::*, readback::*, upload::*};
+
+impl Renderer {
+    /// Renders `meshes` for `view` and reads the image (and depth, if asked) back.
+    pub fn render(
+        &mut self,
+        meshes: &GpuMeshes,
+        view: &View,
+        opts: &RenderOptions,
+    ) -> Result<Frame, RenderError> {
+        let (w, h) = (view.width, view.height);
+        let max = self.gpu.max_texture_side();
+        if w == 0 || h == 0 {
+            return Err(RenderError::BadSize {
+                width: w,
+                height: h,
+                reason: "zero-sized".into(),
+            });
+        }
+        if w > max || h > max {
+            return Err(RenderError::BadSize {
+                width: w,
+                height: h,
+                reason: format!("this adapter's largest texture side is {max}"),
+            });
+        }
+        if opts.msaa != 1 && opts.msaa != 4 {
+            return Err(RenderError::BadSampleCount(opts.msaa));
+        }
+        let scope = self
+            .gpu
+            .device
+            .push_error_scope(wgpu::ErrorFilter::Validation);
+        let oom = self
+            .gpu
+            .device
+            .push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let globals = self.globals(view, opts);
+        let bg = opts.background.map(|c| c as f64 / 255.0);
+        let clear = wgpu::Color {
+            r: bg[0],
+            g: bg[1],
+            b: bg[2],
+            a: 1.0,
+        };
+        let color = self.draw(
+            meshes,
+            &globals,
+            opts,
+            Target::Color { samples: opts.msaa },
+            w,
+            h,
+            clear,
+        )?;
+        let depth = if opts.depth {
+            let no = wgpu::Color {
+                r: NO_DEPTH as f64,
+                g: 0.0,
+                b: 0.0,
+                a: 0.0,
+            };
+            let raw = self.draw(meshes, &globals, opts, Target::Depth, w, h, no)?;
+            let bits: Vec<u32> = bytemuck::pod_collect_to_vec::<u8, u32>(&raw);
+            Some(
+                bits.into_iter()
+                    .map(|b| {
+                        if b == NO_DEPTH {
+                            f32::INFINITY
+                        } else {
+                            f32::from_bits(b)
+                        }
+                    })
+                    .collect(),
+            )
+        } else {
+            None
+        };
+        let ids = if opts.ids {
+            let none = wgpu::Color {
+                r: 0.0,
+                g: 0.0,
+                b: 0.0,
+                a: 0.0,
+            };
+            let raw = self.draw(meshes, &globals, opts, Target::Ids, w, h, none)?;
+            Some(bytemuck::pod_collect_to_vec::<u8, u32>(&raw))
+        } else {
+            None
+        };
+        if let Some(e) = pollster::block_on(oom.pop()) {
+            return Err(RenderError::Gpu(e.to_string()));
+        }
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(RenderError::Gpu(e.to_string()));
+        }
+        Ok(Frame {
+            width: w,
+            height: h,
+            color,
+            depth,
+            ids,
+        })
+    }
+
+    pub(super) fn globals(&self, view: &View, opts: &RenderOptions) -> Globals {
+        let forward = (view.target - view.eye)
+            .try_normalize()
+            .unwrap_or(DVec3::NEG_Z);
+        let right = forward.cross(view.up).try_normalize().unwrap_or(DVec3::X);
+        let up = right.cross(forward);
+        // A key light from above-left of the viewer.
+        let light = (-forward * 0.8 + up * 0.55 - right * 0.35).normalize();
+        let f4 = |v: DVec3| [v.x as f32, v.y as f32, v.z as f32, 0.0];
+        let c = opts.surface_color;
+        Globals {
+            view_proj: view.view_proj_f32().to_cols_array_2d(),
+            eye: f4(view.eye),
+            forward: f4(forward),
+            light: f4(light),
+            color: [c[0], c[1], c[2], 1.0],
+            mode: [
+                match opts.shading {
+                    Shading::Lit => 0,
+                    Shading::Flat => 1,
+                    Shading::Ids => 2,
+                },
+                0,
+                0,
+                0,
+            ],
+        }
+    }
+
+    /// One pass into a fresh target; returns the unpadded bytes of the (resolved) colour target.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn draw(
+        &mut self,
+        meshes: &GpuMeshes,
+        globals: &Globals,
+        opts: &RenderOptions,
+        target: Target,
+        w: u32,
+        h: u32,
+        clear: wgpu::Color,
+    ) -> Result<Vec<u8>, RenderError> {
+        self.pipelines(target);
+        if self.targets.get(&target).is_none_or(|t| t.size != (w, h)) {
+            let t = Targets::new(&self.gpu, &self.bind_layout, target, w, h);
+            self.targets.insert(target, t);
+        }
+        let device = &self.gpu.device;
+        let pipes = &self.pipelines[&target];
+        let targets = &self.targets[&target];
+        self.gpu
+            .queue
+            .write_buffer(&targets.uniform, 0, bytemuck::bytes_of(globals));
+        let (resolved_view, msaa_view, depth_view, bind) = (
+            &targets.resolved_view,
+            &targets.msaa_view,
+            &targets.depth_view,
+            &targets.bind,
+        );
+        let mut encoder = device.create_command_encoder(&Default::default());
+        {
+            let (view, resolve_target) = match msaa_view {
+                Some(v) => (v, Some(resolved_view)),
+                None => (resolved_view, None),
+            };
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("scene"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(clear),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: depth_view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Discard,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_bind_group(0, bind, &[]);
+            for (pipeline, indices, count) in [
+                (&pipes.surface, &meshes.indices, meshes.index_count),
+                (
+                    &pipes.surface_strip,
+                    &meshes.strip_indices,
+                    meshes.strip_index_count,
+                ),
+            ] {
+                if count > 0 {
+                    pass.set_pipeline(pipeline);
+                    pass.set_vertex_buffer(0, meshes.vertices.slice(..));
+                    pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
+                    pass.draw_indexed(0..count, 0, 0..1);
+                }
+            }
+            if !meshes.statics.is_empty() {
+                for (patch, first, count) in &meshes.statics {
+                    pass.set_pipeline(match patch.strips {
+                        Some(_) => &pipes.surface_strip,
+                        None => &pipes.surface,
+                    });
+                    pass.set_vertex_buffer(0, patch.vertices.slice(..));
+                    let indices = patch.strips.as_ref().map_or(&patch.indices, |s| &s.indices);
+                    pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
+                    match &meshes.indirect {
+                        Some(args) => pass.multi_draw_indexed_indirect(
+                            args,
+                            *first as u64 * DRAW_ARGS_BYTES,
+                            *count,
+                        ),
+                        None => {
+                            let ranges = &meshes.ranges[*first as usize..(first + count) as usize];
+                            for &[start, len] in ranges {
+                                pass.draw_indexed(start..start + len, 0, 0..1);
+                            }
+                        }
+                    }
+                }
+            }
+            if let Some((indices, count)) = meshes.border_indices(opts.fat_borders)
+                && *count > 0
+            {
+                pass.set_pipeline(&pipes.border);
+                pass.set_vertex_buffer(0, meshes.border_vertices.slice(..));
+                pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(0..*count, 0, 0..1);
+            }
+        }
+        read_texture(&self.gpu, encoder, targets)
+    }
+}

@@ -1,0 +1,216 @@
+//! Pipelines per render target (colour at a sample count, linear depth, patch IDs) and the
+//! targets themselves, kept between frames of the same size.
+
+use super::upload::*;
+use super::*;
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub(super) struct Globals {
+    pub(super) view_proj: [[f32; 4]; 4],
+    pub(super) eye: [f32; 4],
+    pub(super) forward: [f32; 4],
+    pub(super) light: [f32; 4],
+    pub(super) color: [f32; 4],
+    pub(super) mode: [u32; 4],
+}
+
+#[derive(Debug)]
+pub(super) struct Pipelines {
+    pub(super) surface: wgpu::RenderPipeline,
+    pub(super) surface_strip: wgpu::RenderPipeline,
+    pub(super) border: wgpu::RenderPipeline,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub(super) enum Target {
+    Color { samples: u32 },
+    Depth,
+    Ids,
+}
+
+pub(super) const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+/// Linear depth as f32 bits: `R32Uint` is renderable on every backend, `R32Float` not on GL.
+pub(super) const LINEAR_DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
+pub(super) const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+/// Cleared value of the linear-depth target: "nothing drawn here" (no drawn depth is 0.0).
+pub(super) const NO_DEPTH: u32 = 0;
+
+/// The textures, uniform and readback buffer one pass renders with; reused while the image
+/// size stays the same.
+#[derive(Debug)]
+pub(super) struct Targets {
+    pub(super) size: (u32, u32),
+    pub(super) resolved: wgpu::Texture,
+    pub(super) resolved_view: wgpu::TextureView,
+    pub(super) msaa_view: Option<wgpu::TextureView>,
+    pub(super) depth_view: wgpu::TextureView,
+    pub(super) uniform: wgpu::Buffer,
+    pub(super) bind: wgpu::BindGroup,
+    pub(super) readback: wgpu::Buffer,
+    pub(super) row_bytes: u32,
+    pub(super) padded_row_bytes: u32,
+}
+
+impl Targets {
+    pub(super) fn new(
+        gpu: &Gpu,
+        layout: &wgpu::BindGroupLayout,
+        target: Target,
+        w: u32,
+        h: u32,
+    ) -> Self {
+        let (format, samples) = match target {
+            Target::Color { samples } => (COLOR_FORMAT, samples),
+            Target::Depth | Target::Ids => (LINEAR_DEPTH_FORMAT, 1),
+        };
+        let device = &gpu.device;
+        let size = wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        };
+        let texture = |label, format, samples, usage| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size,
+                mip_level_count: 1,
+                sample_count: samples,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage,
+                view_formats: &[],
+            })
+        };
+        let attach = wgpu::TextureUsages::RENDER_ATTACHMENT;
+        let resolved = texture("target", format, 1, attach | wgpu::TextureUsages::COPY_SRC);
+        let msaa = (samples > 1).then(|| texture("msaa target", format, samples, attach));
+        let depth = texture("depth", DEPTH_FORMAT, samples, attach);
+        let uniform = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("globals"),
+            size: std::mem::size_of::<Globals>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("globals"),
+            layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: uniform.as_entire_binding(),
+            }],
+        });
+        // Both formats have 4 bytes per pixel.
+        let row_bytes = w * 4;
+        let align = wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+        let padded_row_bytes = row_bytes.div_ceil(align) * align;
+        let readback = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size: padded_row_bytes as u64 * h as u64,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        Targets {
+            size: (w, h),
+            resolved_view: resolved.create_view(&Default::default()),
+            resolved,
+            msaa_view: msaa.as_ref().map(|t| t.create_view(&Default::default())),
+            depth_view: depth.create_view(&Default::default()),
+            uniform,
+            bind,
+            readback,
+            row_bytes,
+            padded_row_bytes,
+        }
+    }
+}
+
+impl Renderer {
+    pub(super) fn pipelines(&mut self, target: Target) -> &Pipelines {
+        if !self.pipelines.contains_key(&target) {
+            let p = self.build_pipelines(target);
+            self.pipelines.insert(target, p);
+        }
+        &self.pipelines[&target]
+    }
+
+    pub(super) fn build_pipelines(&self, target: Target) -> Pipelines {
+        let (format, samples, fs) = match target {
+            Target::Color { samples } => (COLOR_FORMAT, samples, "fs_color"),
+            Target::Depth => (LINEAR_DEPTH_FORMAT, 1, "fs_depth"),
+            Target::Ids => (LINEAR_DEPTH_FORMAT, 1, "fs_id"),
+        };
+        let surface_attrs = wgpu::vertex_attr_array![
+            0 => Float32x3, 1 => Float32x3, 2 => Uint32, 3 => Unorm8x4
+        ];
+        let border_attrs = wgpu::vertex_attr_array![
+            0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Float32x3,
+            4 => Float32, 5 => Uint32, 6 => Uint32, 7 => Unorm8x4
+        ];
+        let surface_buffers = [Some(wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<SurfaceVertex>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &surface_attrs,
+        })];
+        let border_buffers = [Some(wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<BorderVertex>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &border_attrs,
+        })];
+        let make = |label: &str,
+                    vs: &str,
+                    buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
+                    strip: bool| {
+            self.gpu
+                .device
+                .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some(label),
+                    layout: Some(&self.layout),
+                    vertex: wgpu::VertexState {
+                        module: &self.module,
+                        entry_point: Some(vs),
+                        compilation_options: Default::default(),
+                        buffers,
+                    },
+                    primitive: wgpu::PrimitiveState {
+                        topology: if strip {
+                            wgpu::PrimitiveTopology::TriangleStrip
+                        } else {
+                            wgpu::PrimitiveTopology::TriangleList
+                        },
+                        strip_index_format: strip.then_some(wgpu::IndexFormat::Uint32),
+                        cull_mode: None,
+                        ..Default::default()
+                    },
+                    depth_stencil: Some(wgpu::DepthStencilState {
+                        format: DEPTH_FORMAT,
+                        depth_write_enabled: Some(true),
+                        depth_compare: Some(wgpu::CompareFunction::LessEqual),
+                        stencil: Default::default(),
+                        bias: Default::default(),
+                    }),
+                    multisample: wgpu::MultisampleState {
+                        count: samples,
+                        ..Default::default()
+                    },
+                    fragment: Some(wgpu::FragmentState {
+                        module: &self.module,
+                        entry_point: Some(fs),
+                        compilation_options: Default::default(),
+                        targets: &[Some(wgpu::ColorTargetState {
+                            format,
+                            blend: None,
+                            write_mask: wgpu::ColorWrites::ALL,
+                        })],
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                })
+        };
+        Pipelines {
+            surface: make("surface", "vs_surface", &surface_buffers, false),
+            surface_strip: make("surface strips", "vs_surface", &surface_buffers, true),
+            border: make("fat border", "vs_border", &border_buffers, false),
+        }
+    }
+}

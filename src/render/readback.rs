@@ -1,0 +1,58 @@
+//! Readback of a rendered target, rows padded to 256 bytes stripped.
+
+use super::pipelines::*;
+use super::*;
+
+/// Copies the resolved target into the readback buffer (rows padded to
+/// `COPY_BYTES_PER_ROW_ALIGNMENT`, 256), maps it and strips the padding.
+pub(super) fn read_texture(
+    gpu: &Gpu,
+    mut encoder: wgpu::CommandEncoder,
+    targets: &Targets,
+) -> Result<Vec<u8>, RenderError> {
+    let (w, h) = targets.size;
+    let (unpadded, padded) = (targets.row_bytes, targets.padded_row_bytes);
+    let (texture, buffer) = (&targets.resolved, &targets.readback);
+    encoder.copy_texture_to_buffer(
+        wgpu::TexelCopyTextureInfo {
+            texture,
+            mip_level: 0,
+            origin: wgpu::Origin3d::ZERO,
+            aspect: wgpu::TextureAspect::All,
+        },
+        wgpu::TexelCopyBufferInfo {
+            buffer,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(padded),
+                rows_per_image: Some(h),
+            },
+        },
+        wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
+    );
+    gpu.queue.submit([encoder.finish()]);
+    let (tx, rx) = std::sync::mpsc::channel();
+    buffer.map_async(wgpu::MapMode::Read, .., move |r| {
+        let _ = tx.send(r);
+    });
+    gpu.device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| RenderError::Readback(e.to_string()))?;
+    rx.recv()
+        .map_err(|e| RenderError::Readback(e.to_string()))?
+        .map_err(|e| RenderError::Readback(e.to_string()))?;
+    let mut out = Vec::with_capacity((unpadded * h) as usize);
+    let copied = buffer.get_mapped_range(..).map(|data| {
+        for row in data.chunks_exact(padded as usize) {
+            out.extend_from_slice(&row[..unpadded as usize]);
+        }
+    });
+    // Unmapped whatever happened: the buffer is reused by the next frame.
+    buffer.unmap();
+    copied.map_err(|e| RenderError::Readback(e.to_string()))?;
+    Ok(out)
+}
