@@ -1,0 +1,514 @@
+//! Tests of [`super`] (gltf_out).
+
+use super::*;
+
+use glam::{Mat4, Quat};
+
+/// A fresh, empty directory for one test.
+fn test_dir(tag: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!(
+        "patchwork-gltf-{}-{tag}-{}",
+        std::process::id(),
+        TEMP_COUNTER.fetch_add(1, Ordering::Relaxed)
+    ));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("create test dir");
+    dir
+}
+
+fn entries(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .expect("read dir")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+const RED: [f32; 4] = [0.8, 0.1, 0.05, 1.0];
+
+fn quad() -> ExportMesh {
+    ExportMesh {
+        name: "quad".into(),
+        positions: vec![
+            [0.0, 0.0, 0.0],
+            [2.0, 0.0, 0.0],
+            [2.0, 1.5, 0.0],
+            [0.0, 1.5, -0.25],
+        ],
+        normals: vec![[0.0, 0.0, 1.0]; 4],
+        indices: vec![0, 1, 2, 0, 2, 3],
+        color: Some(RED),
+    }
+}
+
+fn triangle() -> ExportMesh {
+    ExportMesh {
+        name: "triangle".into(),
+        positions: vec![[-1.0, 0.1, 3.0], [1.0, -0.7, 3.0], [0.0, 1.0, 3.5]],
+        // Not unit, zero, and NaN: normalised, and the last two replaced by +z.
+        normals: vec![[3.0, 0.0, 4.0], [0.0, 0.0, 0.0], [f32::NAN, 1.0, 0.0]],
+        indices: vec![0, 1, 2],
+        color: None,
+    }
+}
+
+fn node(name: &str, mesh: usize, matrix: Mat4) -> ExportNode {
+    ExportNode {
+        name: name.into(),
+        mesh,
+        matrix: matrix.to_cols_array(),
+    }
+}
+
+fn assembly() -> ExportScene {
+    ExportScene {
+        meshes: vec![quad(), triangle()],
+        nodes: vec![
+            node("base", 0, Mat4::IDENTITY),
+            node(
+                "lid",
+                0,
+                Mat4::from_rotation_translation(
+                    Quat::from_rotation_z(std::f32::consts::FRAC_PI_2),
+                    glam::vec3(10.0, 0.0, 0.5),
+                ),
+            ),
+            node(
+                "flag",
+                1,
+                Mat4::from_rotation_translation(
+                    Quat::from_rotation_x(0.3),
+                    glam::vec3(-1.0, 2.0, 3.0),
+                ),
+            ),
+        ],
+        generator: "patchwork test".into(),
+    }
+}
+
+fn as_f32s(v: Option<json::Value>) -> Vec<f32> {
+    v.expect("min/max present")
+        .as_array()
+        .expect("array")
+        .iter()
+        .map(|x| x.as_f64().expect("number") as f32)
+        .collect()
+}
+
+#[test]
+fn assembly_round_trips_through_gltf_import() {
+    let dir = test_dir("roundtrip");
+    let path = dir.join("assembly.glb");
+    let scene = assembly();
+    let stats = write_glb(&path, &scene).expect("write");
+    assert_eq!(
+        stats,
+        GltfStats {
+            meshes: 2,
+            nodes: 3,
+            triangles: 3,
+            bytes: std::fs::metadata(&path).expect("metadata").len() as usize,
+        }
+    );
+    assert_eq!(entries(&dir), ["assembly.glb"], "no temporary file is left");
+
+    // `import` validates the document and loads the BIN chunk.
+    let (doc, buffers, _) = gltf::import(&path).expect("import");
+    let json = doc.as_json();
+    assert_eq!(json.asset.version, "2.0");
+    assert_eq!(json.asset.generator.as_deref(), Some("patchwork test"));
+    assert_eq!(doc.meshes().len(), 2);
+    assert_eq!(doc.nodes().len(), 3);
+    assert_eq!(doc.buffers().len(), 1);
+    let default_scene = doc.default_scene().expect("default scene");
+    let in_scene: Vec<usize> = default_scene.nodes().map(|n| n.index()).collect();
+    assert_eq!(in_scene, [0, 1, 2]);
+
+    for (mesh, input) in doc.meshes().zip(&scene.meshes) {
+        assert_eq!(mesh.name(), Some(input.name.as_str()));
+        assert_eq!(mesh.primitives().len(), 1);
+        let prim = mesh.primitives().next().expect("primitive");
+        assert_eq!(prim.mode(), gltf::mesh::Mode::Triangles);
+        let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+        let positions: Vec<[f32; 3]> = reader.read_positions().expect("positions").collect();
+        assert_eq!(positions, input.positions);
+        let indices: Vec<u32> = reader.read_indices().expect("indices").into_u32().collect();
+        assert_eq!(indices, input.indices);
+        let normals: Vec<[f32; 3]> = reader.read_normals().expect("normals").collect();
+        for (n, expected) in normals.iter().zip(input.normals.iter().map(|&n| {
+            let v = Vec3::from(n);
+            if v.is_finite() && v.length() > 0.0 {
+                v.normalize()
+            } else {
+                Vec3::Z
+            }
+        })) {
+            assert!(Vec3::from(*n).abs_diff_eq(expected, 1e-6), "{n:?}");
+            assert!((Vec3::from(*n).length() - 1.0).abs() < 1e-6);
+        }
+
+        let pos = prim
+            .get(&gltf::Semantic::Positions)
+            .expect("POSITION accessor");
+        let (lo, hi) = bounds(&input.positions);
+        assert_eq!(as_f32s(pos.min()), lo);
+        assert_eq!(as_f32s(pos.max()), hi);
+
+        let material = prim.material();
+        assert!(material.index().is_some());
+        assert!(material.double_sided());
+        let pbr = material.pbr_metallic_roughness();
+        assert_eq!(
+            pbr.base_color_factor(),
+            input.color.unwrap_or(DEFAULT_COLOR)
+        );
+        assert_eq!(pbr.metallic_factor(), 0.0);
+        assert_eq!(pbr.roughness_factor(), ROUGHNESS);
+        assert_eq!(material.alpha_mode(), gltf::material::AlphaMode::Opaque);
+    }
+    assert_eq!(
+        bounds(&quad().positions),
+        ([0.0, 0.0, -0.25], [2.0, 1.5, 0.0])
+    );
+    assert_eq!(doc.materials().len(), 2);
+
+    for (n, input) in doc.nodes().zip(&scene.nodes) {
+        assert_eq!(n.name(), Some(input.name.as_str()));
+        assert_eq!(n.mesh().map(|m| m.index()), Some(input.mesh));
+        assert_eq!(n.transform().matrix().concat(), input.matrix);
+    }
+    assert_eq!(json.nodes[0].matrix, None, "identity is omitted");
+    assert_eq!(json.nodes[1].matrix, Some(scene.nodes[1].matrix));
+    assert_eq!(json.nodes[2].matrix, Some(scene.nodes[2].matrix));
+
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn glb_layout_follows_the_container_rules() {
+    let bytes = to_glb_bytes(&assembly()).expect("encode");
+    let word =
+        |at: usize| u32::from_le_bytes(bytes[at..at + 4].try_into().expect("4 bytes")) as usize;
+    assert_eq!(&bytes[0..4], b"glTF");
+    assert_eq!(word(4), 2);
+    assert_eq!(word(8), bytes.len());
+
+    let json_len = word(12);
+    assert_eq!(&bytes[16..20], b"JSON");
+    assert_eq!(json_len % 4, 0);
+    let json_chunk = &bytes[20..20 + json_len];
+    let end = json_chunk
+        .iter()
+        .rposition(|&b| b == b'}')
+        .expect("JSON ends with }");
+    assert!(json_chunk[end + 1..].iter().all(|&b| b == b' '));
+
+    let bin_at = 20 + json_len;
+    let bin_len = word(bin_at);
+    assert_eq!(&bytes[bin_at + 4..bin_at + 8], b"BIN\0");
+    assert_eq!(bin_len % 4, 0);
+    assert_eq!(bin_at + 8 + bin_len, bytes.len());
+
+    let gltf = gltf::Gltf::from_slice(&bytes).expect("valid glb");
+    let buffer = gltf.buffers().next().expect("buffer");
+    assert_eq!(buffer.length(), bin_len);
+    assert!(matches!(buffer.source(), gltf::buffer::Source::Bin));
+    for mesh in gltf.meshes() {
+        for prim in mesh.primitives() {
+            for (_, accessor) in prim.attributes() {
+                let view = accessor.view().expect("view");
+                assert_eq!(view.target(), Some(gltf::buffer::Target::ArrayBuffer));
+                assert_eq!(view.offset() % 4, 0);
+            }
+            let view = prim.indices().expect("indices").view().expect("view");
+            assert_eq!(
+                view.target(),
+                Some(gltf::buffer::Target::ElementArrayBuffer)
+            );
+            assert_eq!(view.offset() % 4, 0);
+        }
+    }
+}
+
+#[test]
+fn file_bytes_equal_in_memory_bytes() {
+    let dir = test_dir("same");
+    let path = dir.join("a.glb");
+    write_glb(&path, &assembly()).expect("write");
+    assert_eq!(
+        std::fs::read(&path).expect("read"),
+        to_glb_bytes(&assembly()).expect("encode")
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn meshes_without_triangles_are_skipped_with_their_nodes() {
+    let mut scene = assembly();
+    let empty = ExportMesh {
+        name: "empty".into(),
+        positions: vec![[f32::MAX, 0.0, 0.0]],
+        ..Default::default()
+    };
+    scene.meshes.insert(0, empty);
+    for n in &mut scene.nodes {
+        n.mesh += 1;
+    }
+    scene.nodes.insert(1, node("ghost", 0, Mat4::IDENTITY));
+    // Placed by no node: left out as well.
+    scene.meshes.push(triangle());
+
+    let bytes = to_glb_bytes(&scene).expect("encode");
+    let gltf = gltf::Gltf::from_slice(&bytes).expect("valid");
+    assert_eq!(gltf.meshes().len(), 2);
+    let names: Vec<_> = gltf.nodes().map(|n| n.name().map(str::to_owned)).collect();
+    assert_eq!(
+        names,
+        [
+            Some("base".to_owned()),
+            Some("lid".to_owned()),
+            Some("flag".to_owned())
+        ]
+    );
+    let meshes: Vec<_> = gltf
+        .nodes()
+        .map(|n| n.mesh().and_then(|m| m.name().map(str::to_owned)))
+        .collect();
+    assert_eq!(
+        meshes,
+        [
+            Some("quad".to_owned()),
+            Some("quad".to_owned()),
+            Some("triangle".to_owned())
+        ]
+    );
+
+    let dir = test_dir("skip");
+    let stats = write_glb(&dir.join("s.glb"), &scene).expect("write");
+    assert_eq!((stats.meshes, stats.nodes, stats.triangles), (2, 3, 3));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn equal_colours_share_a_material_and_alpha_blends() {
+    let mut scene = assembly();
+    scene.meshes[1].color = Some(RED);
+    let gltf = gltf::Gltf::from_slice(&to_glb_bytes(&scene).expect("encode")).expect("valid");
+    assert_eq!(gltf.materials().len(), 1);
+
+    scene.meshes[1].color = Some([0.2, 0.4, 0.6, 0.5]);
+    let gltf = gltf::Gltf::from_slice(&to_glb_bytes(&scene).expect("encode")).expect("valid");
+    assert_eq!(gltf.materials().len(), 2);
+    let glass = gltf.materials().nth(1).expect("material");
+    assert_eq!(glass.alpha_mode(), gltf::material::AlphaMode::Blend);
+    assert_eq!(
+        glass.pbr_metallic_roughness().base_color_factor(),
+        [0.2, 0.4, 0.6, 0.5]
+    );
+}
+
+#[test]
+fn meshes_without_normals_have_no_normal_attribute() {
+    let mut scene = assembly();
+    scene.meshes[1].normals.clear();
+    let gltf = gltf::Gltf::from_slice(&to_glb_bytes(&scene).expect("encode")).expect("valid");
+    let prim = gltf.meshes().nth(1).expect("mesh").primitives().next();
+    let prim = prim.expect("primitive");
+    assert!(prim.get(&gltf::Semantic::Normals).is_none());
+    assert!(prim.get(&gltf::Semantic::Positions).is_some());
+}
+
+/// Writes `scene` into a fresh directory, expects an error, and checks that the directory
+/// is still empty (no output, no temporary file).
+fn write_fails(tag: &str, scene: &ExportScene) -> GltfWriteError {
+    let dir = test_dir(tag);
+    let path = dir.join("out.glb");
+    let err = write_glb(&path, scene).expect_err("invalid scene");
+    assert_eq!(err.path(), path);
+    assert!(entries(&dir).is_empty(), "{:?}", entries(&dir));
+    let _ = std::fs::remove_dir_all(&dir);
+    assert!(to_glb_bytes(scene).is_err());
+    err
+}
+
+#[test]
+fn node_with_missing_mesh_is_an_error() {
+    let mut scene = assembly();
+    scene.nodes[2].mesh = 7;
+    let err = write_fails("missing", &scene);
+    assert!(
+        matches!(
+            err,
+            GltfWriteError::MissingMesh {
+                node: 2,
+                mesh: 7,
+                meshes: 2,
+                ..
+            }
+        ),
+        "{err}"
+    );
+    assert!(
+        err.to_string()
+            .contains("node 2 (\"flag\") refers to mesh 7")
+    );
+}
+
+#[test]
+fn index_out_of_range_is_an_error() {
+    let mut scene = assembly();
+    scene.meshes[0].indices[4] = 4;
+    let err = write_fails("index", &scene);
+    assert!(
+        matches!(
+            err,
+            GltfWriteError::IndexOutOfRange {
+                mesh: 0,
+                at: 4,
+                index: 4,
+                vertices: 4,
+                ..
+            }
+        ),
+        "{err}"
+    );
+}
+
+#[test]
+fn nan_position_is_an_error() {
+    let mut scene = assembly();
+    scene.meshes[1].positions[2][1] = f32::NAN;
+    let err = write_fails("nan", &scene);
+    assert!(
+        matches!(
+            err,
+            GltfWriteError::NonFinitePosition {
+                mesh: 1,
+                vertex: 2,
+                ..
+            }
+        ),
+        "{err}"
+    );
+    scene.meshes[1].positions[2][1] = f32::INFINITY;
+    assert!(matches!(
+        write_fails("inf", &scene),
+        GltfWriteError::NonFinitePosition { .. }
+    ));
+}
+
+#[test]
+fn empty_scene_is_an_error() {
+    let err = write_fails("empty", &ExportScene::default());
+    assert!(matches!(err, GltfWriteError::Empty { .. }), "{err}");
+
+    let mut only_empty_meshes = assembly();
+    for m in &mut only_empty_meshes.meshes {
+        m.indices.clear();
+    }
+    let err = write_fails("no-triangles", &only_empty_meshes);
+    assert!(matches!(err, GltfWriteError::Empty { .. }), "{err}");
+
+    let mut no_nodes = assembly();
+    no_nodes.nodes.clear();
+    let err = write_fails("no-nodes", &no_nodes);
+    assert!(matches!(err, GltfWriteError::Empty { .. }), "{err}");
+}
+
+#[test]
+fn other_invalid_input_is_an_error() {
+    let mut scene = assembly();
+    scene.meshes[0].indices.pop();
+    assert!(matches!(
+        write_fails("partial", &scene),
+        GltfWriteError::PartialTriangle { len: 5, .. }
+    ));
+
+    let mut scene = assembly();
+    scene.meshes[0].normals.pop();
+    assert!(matches!(
+        write_fails("normals", &scene),
+        GltfWriteError::NormalCount {
+            normals: 3,
+            positions: 4,
+            ..
+        }
+    ));
+
+    let mut scene = assembly();
+    scene.meshes[0].color = Some([1.5, 0.0, 0.0, 1.0]);
+    assert!(matches!(
+        write_fails("color", &scene),
+        GltfWriteError::InvalidColor { .. }
+    ));
+
+    let mut scene = assembly();
+    scene.nodes[1].matrix[13] = f32::NAN;
+    assert!(matches!(
+        write_fails("matrix-nan", &scene),
+        GltfWriteError::InvalidMatrix { node: 1, .. }
+    ));
+
+    let mut scene = assembly();
+    scene.nodes[1].matrix[3] = 0.5;
+    assert!(matches!(
+        write_fails("projective", &scene),
+        GltfWriteError::InvalidMatrix { node: 1, .. }
+    ));
+}
+
+#[test]
+fn in_memory_errors_name_no_file() {
+    let err = to_glb_bytes(&ExportScene::default()).expect_err("empty");
+    assert_eq!(err.path(), Path::new(IN_MEMORY));
+    assert!(err.to_string().starts_with(IN_MEMORY));
+}
+
+#[test]
+fn missing_directory_is_an_io_error_and_leaves_nothing() {
+    let dir = test_dir("nodir");
+    let path = dir.join("missing-subdir").join("x.glb");
+    let err = write_glb(&path, &assembly()).expect_err("cannot write");
+    assert!(matches!(err, GltfWriteError::Io { .. }), "{err}");
+    assert_eq!(err.path(), path);
+    assert!(!path.exists());
+    assert!(entries(&dir).is_empty(), "{:?}", entries(&dir));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn failed_rename_removes_the_temporary_file() {
+    // The target is a directory: the temporary file is written, the rename fails.
+    let dir = test_dir("rename");
+    let path = dir.join("taken.glb");
+    std::fs::create_dir(&path).expect("mkdir");
+    let err = write_glb(&path, &assembly()).expect_err("cannot replace a directory");
+    assert!(matches!(err, GltfWriteError::Io { .. }), "{err}");
+    assert_eq!(entries(&dir), ["taken.glb"]);
+    assert!(path.is_dir());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn failed_write_keeps_an_existing_file() {
+    let dir = test_dir("keep");
+    let path = dir.join("old.glb");
+    std::fs::write(&path, b"old").expect("write old");
+    let mut scene = assembly();
+    scene.nodes[0].mesh = 9;
+    assert!(write_glb(&path, &scene).is_err());
+    assert_eq!(std::fs::read(&path).expect("read"), b"old");
+    assert_eq!(entries(&dir), ["old.glb"]);
+
+    // A valid export replaces it.
+    write_glb(&path, &assembly()).expect("write");
+    assert!(gltf::Gltf::open(&path).is_ok());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn path_without_a_file_name_is_an_io_error() {
+    let err = write_glb(Path::new("/"), &assembly()).expect_err("no file name");
+    assert!(matches!(err, GltfWriteError::Io { .. }), "{err}");
+}
