@@ -37,6 +37,14 @@ use crate::render::{FatBorders, Frame, RenderError, RenderOptions, Renderer, Sha
 use crate::tessellate::PatchMesh;
 use crate::view::View;
 
+mod orbit;
+mod overlay;
+mod present;
+
+pub use orbit::Orbit;
+pub use overlay::draw_wireframe;
+use present::Present;
+
 /// Why the viewer could not run.
 #[derive(Debug, Error)]
 pub enum ViewerError {
@@ -138,125 +146,7 @@ pub struct ViewerReport {
     pub mean_frame_ms: f64,
 }
 
-/// Orbit camera around a target, `up` being the model's up axis.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Orbit {
-    pub target: DVec3,
-    pub distance: f64,
-    /// Angle around `up`, radians.
-    pub yaw: f64,
-    /// Angle above the horizontal plane, radians (kept within ±89°).
-    pub pitch: f64,
-    pub up: DVec3,
-}
-
-impl Orbit {
-    /// The camera of [`View::framing`] (fit to view).
-    pub fn fit(scene: &Scene, fov_y: f64, size: (u32, u32)) -> Orbit {
-        let up = scene.up.vector();
-        let v = View::framing(&scene.bounds, up, fov_y, size);
-        let d = v.eye - v.target;
-        let (x, y) = basis(up);
-        let h = d - up * d.dot(up);
-        Orbit {
-            target: v.target,
-            distance: d.length(),
-            yaw: h.dot(y).atan2(h.dot(x)),
-            pitch: (d.dot(up) / d.length()).clamp(-1.0, 1.0).asin(),
-            up,
-        }
-    }
-
-    pub fn eye(&self) -> DVec3 {
-        let (x, y) = basis(self.up);
-        let dir = (x * self.yaw.cos() + y * self.yaw.sin()) * self.pitch.cos()
-            + self.up * self.pitch.sin();
-        self.target + dir * self.distance
-    }
-
-    pub fn view(&self, scene: &Scene, fov_y: f64, size: (u32, u32)) -> View {
-        View::new(self.eye(), self.target, self.up, fov_y, size, &scene.bounds)
-    }
-
-    pub fn rotate(&mut self, dyaw: f64, dpitch: f64) {
-        let limit = 89f64.to_radians();
-        self.yaw += dyaw;
-        self.pitch = (self.pitch + dpitch).clamp(-limit, limit);
-    }
-
-    /// Moves the target by `(dx, dy)` pixels of a view of height `height` and field `fov_y`.
-    pub fn pan(&mut self, dx: f64, dy: f64, fov_y: f64, height: u32) {
-        let forward = (self.target - self.eye()).normalize();
-        let right = forward.cross(self.up).normalize_or_zero();
-        let up = right.cross(forward);
-        let pixel = self.distance * 2.0 * (fov_y * 0.5).tan() / height.max(1) as f64;
-        self.target += (-right * dx + up * dy) * pixel;
-    }
-
-    /// Multiplies the distance by `factor` (> 0).
-    pub fn zoom(&mut self, factor: f64) {
-        if factor.is_finite() && factor > 0.0 {
-            self.distance = (self.distance * factor).max(1e-9);
-        }
-    }
-}
-
-/// Two unit vectors completing `up` to a right-handed basis.
-fn basis(up: DVec3) -> (DVec3, DVec3) {
-    let a = if up.x.abs() < 0.9 { DVec3::X } else { DVec3::Y };
-    let x = (a - up * a.dot(up)).normalize();
-    (x, up.cross(x))
-}
-
 pub use crate::frame::heat_color;
-
-/// Draws the visible edges of `meshes` onto `frame` (dark grey): an edge pixel is drawn where
-/// its depth is within 0.5 % of the depth buffer's (hidden edges stay hidden).
-pub fn draw_wireframe<'a>(
-    frame: &mut Frame,
-    view: &View,
-    meshes: impl IntoIterator<Item = &'a PatchMesh>,
-) {
-    let Some(depth) = frame.depth.clone() else {
-        return;
-    };
-    let (w, h) = (frame.width as usize, frame.height as usize);
-    for m in meshes {
-        let projected: Vec<Option<(f64, f64, f64)>> = m
-            .positions
-            .iter()
-            .map(|p| view.project(p.as_dvec3()))
-            .collect();
-        for t in &m.triangles {
-            for k in 0..3 {
-                let (a, b) = (t[k], t[(k + 1) % 3]);
-                // Each interior edge is listed twice; draw it once.
-                if a > b && m.triangles.len() > 1 {
-                    continue;
-                }
-                let (Some(pa), Some(pb)) = (projected[a as usize], projected[b as usize]) else {
-                    continue;
-                };
-                let steps = ((pb.0 - pa.0).abs().max((pb.1 - pa.1).abs()).ceil() as usize).max(1);
-                if steps > 4 * (w + h) {
-                    continue;
-                }
-                for s in 0..=steps {
-                    let f = s as f64 / steps as f64;
-                    let (x, y) = (pa.0 + (pb.0 - pa.0) * f, pa.1 + (pb.1 - pa.1) * f);
-                    if x < 0.0 || y < 0.0 || x as usize >= w || y as usize >= h {
-                        continue;
-                    }
-                    let i = y as usize * w + x as usize;
-                    let d = pa.2 + (pb.2 - pa.2) * f;
-                    if (d as f32) <= depth[i] * 1.005 {
-                        frame.color[4 * i..4 * i + 3].copy_from_slice(&[40, 40, 40]);
-                    }
-                }
-            }
-        }
-    }
-}
 
 /// Opens the window and runs until it is closed (or the scripted frames are drawn).
 pub fn run(mut scene: Scene, options: ViewerOptions) -> Result<ViewerReport, ViewerError> {
@@ -345,136 +235,6 @@ struct State {
     present: Present,
     frame: FrameState,
     last: Option<Frame>,
-}
-
-/// The one-triangle copy of a frame onto the surface.
-struct Present {
-    pipeline: wgpu::RenderPipeline,
-    layout: wgpu::BindGroupLayout,
-    texture_format: wgpu::TextureFormat,
-}
-
-impl Present {
-    fn new(device: &wgpu::Device, surface_format: wgpu::TextureFormat) -> Present {
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("present.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(crate::render::shaders::PRESENT.into()),
-        });
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("present"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::FRAGMENT,
-                ty: wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                    view_dimension: wgpu::TextureViewDimension::D2,
-                    multisampled: false,
-                },
-                count: None,
-            }],
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("present"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("present"),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_present"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: None,
-            multisample: wgpu::MultisampleState::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_present"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: surface_format,
-                    blend: None,
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
-        // sRGB surface: upload as sRGB so load + store leave the bytes unchanged.
-        let texture_format = if surface_format.is_srgb() {
-            wgpu::TextureFormat::Rgba8UnormSrgb
-        } else {
-            wgpu::TextureFormat::Rgba8Unorm
-        };
-        Present {
-            pipeline,
-            layout,
-            texture_format,
-        }
-    }
-
-    fn draw(&self, gpu: &Gpu, frame: &Frame, target: &wgpu::TextureView) {
-        let size = wgpu::Extent3d {
-            width: frame.width,
-            height: frame.height,
-            depth_or_array_layers: 1,
-        };
-        let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("frame"),
-            size,
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: self.texture_format,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-            view_formats: &[],
-        });
-        gpu.queue.write_texture(
-            texture.as_image_copy(),
-            &frame.color,
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(4 * frame.width),
-                rows_per_image: Some(frame.height),
-            },
-            size,
-        );
-        let view = texture.create_view(&Default::default());
-        let bind = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("present"),
-            layout: &self.layout,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: wgpu::BindingResource::TextureView(&view),
-            }],
-        });
-        let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        {
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("present"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: target,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: None,
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, &bind, &[]);
-            pass.draw(0..3, 0..1);
-        }
-        gpu.queue.submit([encoder.finish()]);
-    }
 }
 
 impl App {

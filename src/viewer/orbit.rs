@@ -1,0 +1,73 @@
+//! The orbit camera: around a target, the model's up axis kept up.
+
+use super::*;
+
+/// Orbit camera around a target, `up` being the model's up axis.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Orbit {
+    pub target: DVec3,
+    pub distance: f64,
+    /// Angle around `up`, radians.
+    pub yaw: f64,
+    /// Angle above the horizontal plane, radians (kept within ±89°).
+    pub pitch: f64,
+    pub up: DVec3,
+}
+
+impl Orbit {
+    /// The camera of [`View::framing`] (fit to view).
+    pub fn fit(scene: &Scene, fov_y: f64, size: (u32, u32)) -> Orbit {
+        let up = scene.up.vector();
+        let v = View::framing(&scene.bounds, up, fov_y, size);
+        let d = v.eye - v.target;
+        let (x, y) = basis(up);
+        let h = d - up * d.dot(up);
+        Orbit {
+            target: v.target,
+            distance: d.length(),
+            yaw: h.dot(y).atan2(h.dot(x)),
+            pitch: (d.dot(up) / d.length()).clamp(-1.0, 1.0).asin(),
+            up,
+        }
+    }
+
+    pub fn eye(&self) -> DVec3 {
+        let (x, y) = basis(self.up);
+        let dir = (x * self.yaw.cos() + y * self.yaw.sin()) * self.pitch.cos()
+            + self.up * self.pitch.sin();
+        self.target + dir * self.distance
+    }
+
+    pub fn view(&self, scene: &Scene, fov_y: f64, size: (u32, u32)) -> View {
+        View::new(self.eye(), self.target, self.up, fov_y, size, &scene.bounds)
+    }
+
+    pub fn rotate(&mut self, dyaw: f64, dpitch: f64) {
+        let limit = 89f64.to_radians();
+        self.yaw += dyaw;
+        self.pitch = (self.pitch + dpitch).clamp(-limit, limit);
+    }
+
+    /// Moves the target by `(dx, dy)` pixels of a view of height `height` and field `fov_y`.
+    pub fn pan(&mut self, dx: f64, dy: f64, fov_y: f64, height: u32) {
+        let forward = (self.target - self.eye()).normalize();
+        let right = forward.cross(self.up).normalize_or_zero();
+        let up = right.cross(forward);
+        let pixel = self.distance * 2.0 * (fov_y * 0.5).tan() / height.max(1) as f64;
+        self.target += (-right * dx + up * dy) * pixel;
+    }
+
+    /// Multiplies the distance by `factor` (> 0).
+    pub fn zoom(&mut self, factor: f64) {
+        if factor.is_finite() && factor > 0.0 {
+            self.distance = (self.distance * factor).max(1e-9);
+        }
+    }
+}
+
+/// Two unit vectors completing `up` to a right-handed basis.
+fn basis(up: DVec3) -> (DVec3, DVec3) {
+    let a = if up.x.abs() < 0.9 { DVec3::X } else { DVec3::Y };
+    let x = (a - up * a.dot(up)).normalize();
+    (x, up.cross(x))
+}
