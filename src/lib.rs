@@ -25,4 +25,5 @@ pub mod report;
 pub mod strips;
 pub mod tessellate;
 pub mod view;
+#[cfg(feature = "viewer")]
 pub mod viewer;

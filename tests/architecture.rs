@@ -117,7 +117,9 @@ fn violations(modules: &BTreeMap<String, String>) -> Vec<String> {
     let mut bad = Vec::new();
     for (name, src) in modules {
         let Some(own) = stage_of(name) else {
-            bad.push(format!("{name}: not in STAGES (give the new module its stage)"));
+            bad.push(format!(
+                "{name}: not in STAGES (give the new module its stage)"
+            ));
             continue;
         };
         let mut seen: Vec<String> = uses(src);
@@ -143,7 +145,11 @@ fn violations(modules: &BTreeMap<String, String>) -> Vec<String> {
 fn no_module_imports_from_a_later_stage() {
     let modules = modules();
     let bad = violations(&modules);
-    assert!(bad.is_empty(), "imports against the stages:\n{}", bad.join("\n"));
+    assert!(
+        bad.is_empty(),
+        "imports against the stages:\n{}",
+        bad.join("\n")
+    );
 }
 
 /// The check sees a backward import (here: the model reaching up into the renderer) and a

@@ -119,6 +119,7 @@ pub fn read_gltf(path: &Path) -> Result<TriMesh, LoadError> {
 }
 
 /// Reads the faces of a Wavefront OBJ file (polygons are triangulated as fans).
+#[cfg(feature = "obj")]
 pub fn read_obj(path: &Path) -> Result<TriMesh, LoadError> {
     let text = std::fs::read(path).map_err(|source| LoadError::Io {
         path: path.to_path_buf(),
@@ -167,6 +168,7 @@ pub fn read_obj(path: &Path) -> Result<TriMesh, LoadError> {
 /// `vertex` and the `vertex_indices` (or `vertex_index`) list of every `face`; polygons are
 /// triangulated as fans. Element counts larger than the file could hold are refused before
 /// anything is allocated, and a panic inside the parser becomes an error.
+#[cfg(feature = "ply")]
 pub fn read_ply(path: &Path) -> Result<TriMesh, LoadError> {
     use ply_rs::ply::{DefaultElement, Property};
     let unreadable = |reason: String| LoadError::Unreadable {
@@ -280,4 +282,24 @@ pub fn read_ply(path: &Path) -> Result<TriMesh, LoadError> {
         });
     }
     Ok(mesh)
+}
+
+/// Without the `obj` feature: an error naming it.
+#[cfg(not(feature = "obj"))]
+pub fn read_obj(path: &Path) -> Result<TriMesh, LoadError> {
+    Err(LoadError::NotBuiltIn {
+        path: path.to_path_buf(),
+        format: "OBJ",
+        feature: "obj",
+    })
+}
+
+/// Without the `ply` feature: an error naming it.
+#[cfg(not(feature = "ply"))]
+pub fn read_ply(path: &Path) -> Result<TriMesh, LoadError> {
+    Err(LoadError::NotBuiltIn {
+        path: path.to_path_buf(),
+        format: "PLY",
+        feature: "ply",
+    })
 }

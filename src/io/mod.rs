@@ -89,6 +89,13 @@ pub enum LoadError {
         .path.display()
     )]
     UnsupportedFormat { path: PathBuf, extension: String },
+    /// A format whose reader this build left out (a Cargo feature, on by default).
+    #[error("{}: {format} files need patchwork built with the `{feature}` feature", .path.display())]
+    NotBuiltIn {
+        path: PathBuf,
+        format: &'static str,
+        feature: &'static str,
+    },
 }
 
 impl LoadError {
@@ -103,7 +110,8 @@ impl LoadError {
             | LoadError::NoFaces { path, .. }
             | LoadError::Unreadable { path, .. }
             | LoadError::Patch { path, .. }
-            | LoadError::UnsupportedFormat { path, .. } => path,
+            | LoadError::UnsupportedFormat { path, .. }
+            | LoadError::NotBuiltIn { path, .. } => path,
         }
     }
 
@@ -119,7 +127,18 @@ impl LoadError {
 /// Most bytes a compressed model may expand to.
 pub const MAX_GUNZIPPED_BYTES: u64 = 4 << 30;
 
+/// Without the `gzip` feature: an error naming it.
+#[cfg(not(feature = "gzip"))]
+fn read_gzip(path: &Path) -> Result<Vec<u8>, LoadError> {
+    Err(LoadError::NotBuiltIn {
+        path: path.to_path_buf(),
+        format: "gzipped STEP",
+        feature: "gzip",
+    })
+}
+
 /// The decompressed bytes of a gzip file, at most [`MAX_GUNZIPPED_BYTES`].
+#[cfg(feature = "gzip")]
 fn read_gzip(path: &Path) -> Result<Vec<u8>, LoadError> {
     use std::io::Read;
     let file = std::fs::File::open(path).map_err(|source| LoadError::Io {

@@ -16,6 +16,7 @@ use patchwork::io::depth::DepthError;
 use patchwork::io::gltf_out::GltfWriteError;
 use patchwork::io::png::WriteError;
 use patchwork::render::RenderError;
+#[cfg(feature = "viewer")]
 use patchwork::viewer::ViewerError;
 
 #[derive(Debug, Error)]
@@ -35,6 +36,7 @@ pub enum CliError {
     #[error(transparent)]
     Depth(#[from] DepthError),
     #[error(transparent)]
+    #[cfg(feature = "viewer")]
     Viewer(#[from] ViewerError),
 
     /// A number outside its range: `--fov must be between 0.5 and 179 degrees, got 0`.
@@ -66,8 +68,10 @@ pub enum CliError {
     /// `bench` without a benchmark flag.
     #[error("say which benchmark: --flythrough")]
     NoBenchmark,
+    #[cfg(feature = "viewer")]
     #[error("--keys: unknown key {key:?}")]
     UnknownKey { key: String },
+    #[cfg(feature = "viewer")]
     #[error("--keys: {keys} keys for {frames} frames")]
     TooManyKeys { keys: usize, frames: usize },
 

@@ -36,6 +36,7 @@ enum Command {
     /// Benchmarks: `--flythrough` drives a recorded camera path through the LOD frame loop.
     Bench(cmd::bench::BenchArgs),
     /// Interactive viewer (needs a display; `xvfb-run -a` gives a virtual one).
+    #[cfg(feature = "viewer")]
     View(cmd::view::ViewArgs),
     /// Animate parts (or patches) flying together (or apart): numbered PNGs, an animated GIF,
     /// and an MP4 when `ffmpeg` is on the PATH.
@@ -50,6 +51,7 @@ fn main() -> ExitCode {
         Command::Check(a) => cmd::check::run(a),
         Command::Export(a) => cmd::export::run(a).map(|()| true),
         Command::Bench(a) => cmd::bench::run(a),
+        #[cfg(feature = "viewer")]
         Command::View(a) => cmd::view::run(a).map(|()| true),
         Command::Implode(a) => cmd::implode::run(a),
     };

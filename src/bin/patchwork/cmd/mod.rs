@@ -7,6 +7,7 @@ pub mod export;
 pub mod implode;
 pub mod render;
 pub mod stats;
+#[cfg(feature = "viewer")]
 pub mod view;
 
 use std::path::Path;
