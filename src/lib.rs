@@ -19,5 +19,6 @@ pub mod mt;
 pub mod render;
 pub mod strips;
 pub mod tessellate;
+mod util;
 pub mod view;
 pub mod viewer;

@@ -32,7 +32,7 @@
 use std::collections::VecDeque;
 
 use super::{StripIndices, encode_path};
-use crate::mt::IntMap;
+use crate::util::IntMap;
 
 const NONE: u32 = u32::MAX;
 
