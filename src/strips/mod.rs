@@ -2,6 +2,7 @@
 //!
 //! - [`tunnel`]: Stewart's tunneling (static meshes, and incremental repair after edge
 //!   collapses / vertex splits) — the `stewart-tunneling-strips` paper.
+//! - [`cut_strips`]: tunneling strips kept while an MT hierarchy's cut moves node by node.
 //! - [`mts`]: Belmonte et al.'s multiresolution triangle strips for a patch's MT hierarchy —
 //!   the `belmonte-multiresolution-strips` paper.
 //! - Static strips per arc of an MT hierarchy (Holst §5.2) are [`arc_strips`].
@@ -13,6 +14,7 @@
 //! restart index [`RESTART`] (`strip_index_format: Uint32`), or — where primitive restart
 //! is unreliable — by zero-area windows ([`join_degenerate`], [`Join`]).
 
+pub mod cut_strips;
 pub mod mts;
 pub mod store;
 pub mod tunnel;
