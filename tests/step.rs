@@ -608,3 +608,43 @@ fn gzip_compressed_step_loads_like_the_file() {
         Err(LoadError::UnsupportedFormat { .. })
     ));
 }
+
+/// A solid with a void (BREP_WITH_VOIDS) is one placed solid, as a kernel reads it: its void
+/// shell joins the outer shell's instance instead of being placed as a solid of its own.
+#[test]
+fn a_solid_with_a_void_is_one_instance() {
+    let text = std::fs::read_to_string(common::root().join("models/screw.step")).expect("screw");
+    let plain = parse(&text).expect("screw loads");
+    // A second shell entity with the same faces, reversed, as the void (enough to give the
+    // solid two shells).
+    let voided = text
+        .replace(
+            "#12 = MANIFOLD_SOLID_BREP('',#13);",
+            "#12 = BREP_WITH_VOIDS('',#13,(#999991));\n\
+             #999991 = ORIENTED_CLOSED_SHELL('',*,#999992,.F.);",
+        )
+        .replacen("#13 = CLOSED_SHELL('',(", "#999992 = CLOSED_SHELL('',(", 1);
+    // ... and #13 itself again, under its own id.
+    let shell13 = text
+        .lines()
+        .skip_while(|l| !l.starts_with("#13 = CLOSED_SHELL"))
+        .scan(false, |done, l| {
+            if *done {
+                return None;
+            }
+            *done = l.trim_end().ends_with(';');
+            Some(l)
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    let voided = voided.replacen("DATA;", &format!("DATA;\n{shell13}"), 1);
+    assert_ne!(
+        voided, text,
+        "screw.step changed: the test no longer adds a void"
+    );
+    let scene = parse(&voided).expect("voided screw loads");
+    assert_eq!(plain.instances.len(), 1);
+    assert_eq!(scene.instances.len(), 1, "{:?}", scene.instances);
+    assert_eq!(scene.patches.len(), 2 * plain.patches.len());
+    assert!(scene.patches.iter().all(|p| p.instance == 0));
+}

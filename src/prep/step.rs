@@ -86,16 +86,36 @@ pub fn assemble(model: StepModel, progress: &dyn Progress) -> Result<Scene, Load
     let mut patches = Vec::new();
     let mut corners = Vec::new();
     let mut instances = Vec::new();
+    // One instance per placed solid, as a kernel reads it: the void shells of a
+    // BREP_WITH_VOIDS placed with its outer shell join the outer shell's instance.
+    let mut solid_instance: HashMap<(u64, usize, String, [u64; 16]), u32> = HashMap::new();
     for inst in &structure.instances {
         let transform = DMat4::from_scale(DVec3::splat(unit)) * inst.transform;
         let scale = transform_scale(&transform);
-        let instance = instances.len() as u32;
-        instances.push(Instance {
-            name: inst.instance_name.clone(),
-            part: inst.part as u32,
-            transform,
-            shell: Some(inst.shell),
+        let key = inst.solid.map(|solid| {
+            (
+                solid,
+                inst.part,
+                inst.instance_name.clone(),
+                transform.to_cols_array().map(f64::to_bits),
+            )
         });
+        let instance = match key.as_ref().and_then(|k| solid_instance.get(k)) {
+            Some(&i) => i,
+            None => {
+                let i = instances.len() as u32;
+                instances.push(Instance {
+                    name: inst.instance_name.clone(),
+                    part: inst.part as u32,
+                    transform,
+                    shell: Some(inst.shell),
+                });
+                if let Some(k) = key {
+                    solid_instance.insert(k, i);
+                }
+                i
+            }
+        };
         for fid in face_ids.get(&inst.shell).into_iter().flatten() {
             let Some((face, (lo, hi))) = faces.get(fid) else {
                 continue;
