@@ -87,19 +87,23 @@ pub fn assemble(model: StepModel, progress: &dyn Progress) -> Result<Scene, Load
     let mut corners = Vec::new();
     let mut instances = Vec::new();
     // One instance per placed solid, as a kernel reads it: the void shells of a
-    // BREP_WITH_VOIDS placed with its outer shell join the outer shell's instance.
+    // BREP_WITH_VOIDS placed with its outer shell join the outer shell's instance (the shells
+    // of a SHELL_BASED_SURFACE_MODEL stay shapes of their own, as in OCCT).
     let mut solid_instance: HashMap<(u64, usize, String, [u64; 16]), u32> = HashMap::new();
     for inst in &structure.instances {
         let transform = DMat4::from_scale(DVec3::splat(unit)) * inst.transform;
         let scale = transform_scale(&transform);
-        let key = inst.solid.map(|solid| {
-            (
-                solid,
-                inst.part,
-                inst.instance_name.clone(),
-                transform.to_cols_array().map(f64::to_bits),
-            )
-        });
+        let key = inst
+            .solid
+            .filter(|s| structure.voided_solids.contains(s))
+            .map(|solid| {
+                (
+                    solid,
+                    inst.part,
+                    inst.instance_name.clone(),
+                    transform.to_cols_array().map(f64::to_bits),
+                )
+            });
         let instance = match key.as_ref().and_then(|k| solid_instance.get(k)) {
             Some(&i) => i,
             None => {

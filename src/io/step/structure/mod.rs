@@ -109,6 +109,8 @@ pub struct Structure {
     /// `GLOBAL_UNCERTAINTY_ASSIGNED_CONTEXT`, the largest if several), in file length units: how
     /// far the writer's vertices may lie from their curves and surfaces.
     pub uncertainty: Option<f64>,
+    /// `BREP_WITH_VOIDS` solids: their shells (outer and voids) make one solid.
+    pub voided_solids: std::collections::HashSet<u64>,
     /// Human-readable notes (e.g. "2 shells not reached from any product; placed at identity").
     pub warnings: Vec<String>,
 }
@@ -264,6 +266,12 @@ pub fn analyse(file: &P21File) -> Structure {
         length_unit_mm,
         plane_angle_rad: plane_angle_unit(file),
         uncertainty: uncertainty(file),
+        voided_solids: file
+            .entities
+            .iter()
+            .filter(|e| e.has("BREP_WITH_VOIDS"))
+            .map(|e| e.id)
+            .collect(),
         warnings,
     }
 }
