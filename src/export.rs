@@ -139,12 +139,7 @@ pub fn assemble(scene: &Scene, opts: &ExportOptions) -> Result<ExportScene, Expo
                     };
                     let mut m = PatchMesh::default();
                     t.patch(&local, eps, &mut m);
-                    let base = mesh.positions.len() as u32;
-                    mesh.positions
-                        .extend(m.positions.iter().map(|v| v.to_array()));
-                    mesh.normals.extend(m.normals.iter().map(|v| v.to_array()));
-                    mesh.indices
-                        .extend(m.triangles.iter().flatten().map(|i| base + i));
+                    append_used(&mut mesh, &m);
                     if mesh.color.is_none() {
                         mesh.color = p.color.map(|c| [c[0], c[1], c[2], 1.0]);
                     }
@@ -170,6 +165,22 @@ pub fn assemble(scene: &Scene, opts: &ExportOptions) -> Result<ExportScene, Expo
         nodes,
         generator: opts.generator.clone(),
     })
+}
+
+/// Appends the triangles of `m` with only the vertices they use: a trimmed face's mesh also
+/// holds vertices of the untrimmed surface that no triangle kept, which would stretch the
+/// bounds other tools compute from the vertices.
+fn append_used(mesh: &mut ExportMesh, m: &PatchMesh) {
+    let mut remap = vec![u32::MAX; m.positions.len()];
+    for &i in m.triangles.iter().flatten() {
+        let slot = &mut remap[i as usize];
+        if *slot == u32::MAX {
+            *slot = mesh.positions.len() as u32;
+            mesh.positions.push(m.positions[i as usize].to_array());
+            mesh.normals.push(m.normals[i as usize].to_array());
+        }
+        mesh.indices.push(*slot);
+    }
 }
 
 #[cfg(test)]
@@ -203,6 +214,29 @@ mod tests {
         assert!(doc.generator.starts_with("patchwork "));
         // Every patch contributed triangles (32 patches, at least 2 each).
         assert!(triangles(&doc) >= 64, "{}", triangles(&doc));
+    }
+
+    /// A trimmed face's mesh also holds vertices of its untrimmed surface that no triangle
+    /// kept; the export leaves them out (other tools take bounds from the vertices).
+    #[test]
+    fn every_exported_vertex_is_used() {
+        let scene = load("corpus/wing_fuselage.step");
+        let doc = assemble(&scene, &ExportOptions::default()).expect("assembles");
+        for m in &doc.meshes {
+            let mut used = vec![false; m.positions.len()];
+            for &i in &m.indices {
+                used[i as usize] = true;
+            }
+            let unused = used.iter().filter(|u| !**u).count();
+            assert_eq!(
+                unused,
+                0,
+                "{}: {unused} of {} vertices unused",
+                m.name,
+                used.len()
+            );
+            assert_eq!(m.normals.len(), m.positions.len());
+        }
     }
 
     #[test]
