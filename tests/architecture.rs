@@ -229,3 +229,25 @@ fn no_source_file_is_longer_than_800_lines_without_a_reason() {
         long.join("\n")
     );
 }
+
+/// Library modules that print (`println!` / `eprintln!` / `print!` / `eprint!`): only the
+/// binary prints; the library returns data, errors and progress through `prep::Progress`.
+fn printing(modules: &BTreeMap<String, String>) -> Vec<String> {
+    modules
+        .iter()
+        .filter(|(_, src)| src.contains("print!(") || src.contains("println!("))
+        .map(|(name, _)| name.clone())
+        .collect()
+}
+
+#[test]
+fn the_library_prints_nothing() {
+    let mut modules = modules();
+    assert_eq!(printing(&modules), Vec::<String>::new());
+    // The check sees a warning printed by a reader.
+    modules
+        .get_mut("io")
+        .expect("io")
+        .push_str("eprintln!(\"warning: {w}\");\n");
+    assert_eq!(printing(&modules), ["io"]);
+}

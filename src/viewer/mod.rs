@@ -80,6 +80,9 @@ pub struct ViewerOptions {
     pub implode: Option<ViewerAnimation>,
     /// Triangle lists or strips.
     pub primitives: crate::render::Primitives,
+    /// Where the viewer's messages go (the adapter chosen, screenshots written, a screenshot
+    /// that failed): the library prints nothing; the binary passes a function that does.
+    pub notify: fn(&str),
 }
 
 /// The viewer's animation: the parts (or patches) fly together over `frames` frames, stay
@@ -288,7 +291,7 @@ impl App {
         let present = Present::new(&gpu.device, format);
         let mut renderer = Renderer::with_gpu(gpu)?;
         renderer.primitives = self.options.primitives;
-        eprintln!("adapter: {}", renderer.gpu().describe());
+        (self.options.notify)(&format!("adapter: {}", renderer.gpu().describe()));
         let view = self.view(config.width, config.height);
         let frame = FrameState::new(&self.scene, &view, self.options.lod);
         Ok(State {
@@ -402,7 +405,7 @@ impl App {
             }
         };
         crate::io::png::write_rgba(&path, &frame.to_rgba_image())?;
-        eprintln!("wrote {}", path.display());
+        (self.options.notify)(&format!("wrote {}", path.display()));
         Ok(())
     }
 
@@ -451,7 +454,7 @@ impl App {
             Key::Character("-") => self.scale_pixel_error(0.5),
             Key::Character("p") => {
                 if let Err(e) = self.screenshot() {
-                    eprintln!("error: {e}");
+                    (self.options.notify)(&format!("error: {e}"));
                 }
             }
             _ => return,

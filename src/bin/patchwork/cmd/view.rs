@@ -97,6 +97,7 @@ pub fn run(args: &ViewArgs) -> Result<(), CliError> {
                 frames: args.implode_frames.max(2),
             }),
             primitives: args.primitives.primitives,
+            notify: |m| eprintln!("{m}"),
         },
     )?;
     eprintln!(
