@@ -648,3 +648,42 @@ fn a_solid_with_a_void_is_one_instance() {
     assert_eq!(scene.patches.len(), 2 * plain.patches.len());
     assert!(scene.patches.iter().all(|p| p.instance == 0));
 }
+
+/// A face bounded by closed B-spline curves with unclamped knots (OCCT writes them: knots
+/// (1, 3, 2, …, 3, 1) over −0.145..1.119): each curve is defined on its clamped range
+/// [u_p, u_{n}] = 0..1, not on the whole knot vector, so the loop runs once around and the
+/// face is drawn (it was skipped as "the trimmed domain is empty"; from kicad-demo-tinytapeout).
+#[test]
+fn a_loop_of_unclamped_bsplines_bounds_its_face() {
+    let path = common::root().join("tests/data/step/unclamped_bspline_loop.step");
+    let scene = load(&path).expect("loads");
+    assert!(scene.skipped.is_empty(), "{:?}", scene.skipped);
+    assert_eq!(scene.patches.len(), 1);
+    let view = patchwork::view::View::framing(
+        &scene.bounds,
+        scene.up.vector(),
+        45f64.to_radians(),
+        (800, 600),
+    );
+    let meshes = patchwork::tessellate::tessellate_scene(&scene, &view, 0.5);
+    let m = &meshes[0];
+    assert!(m.failure.is_none(), "{:?}", m.failure);
+    // The ring between the two loops: its outer loop spans x −9.818..−8.894, y 1.965..2.965.
+    let (lo, hi) = m.positions.iter().fold(
+        (glam::Vec3::splat(f32::MAX), glam::Vec3::splat(f32::MIN)),
+        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+    );
+    let near = |a: f32, b: f32| (a - b).abs() < 2e-3;
+    assert!(near(lo.x, -9.8175) && near(hi.x, -8.8942), "{lo} {hi}");
+    assert!(near(lo.y, 1.965) && near(hi.y, 2.965), "{lo} {hi}");
+    let area: f32 = m
+        .triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| m.positions[i as usize]);
+            (b - a).cross(c - a).length() / 2.0
+        })
+        .sum();
+    // Outer loop ≈ 0.92 × 1.0 rounded rectangle, inner ≈ 0.66 × 0.78: a ring of ~0.35 mm².
+    assert!((0.2..0.6).contains(&area), "area {area}");
+}

@@ -44,9 +44,7 @@ impl TrimEdge {
     /// from `start` to `end`. `None` when the vertices are not on the curve (within `tol`) or
     /// the curve is not finite there.
     pub fn new(id: u64, curve: Curve3D, start: DVec3, end: DVec3, tol: f64) -> Option<TrimEdge> {
-        let range = curve
-            .try_range_tuple()
-            .filter(|(a, b)| a.is_finite() && b.is_finite());
+        let range = curve_range(&curve).filter(|(a, b)| a.is_finite() && b.is_finite());
         let ends = range.map(|(a, b)| (a, b, to_dvec(curve.subs(a)), to_dvec(curve.subs(b))));
         let (t0, t1) = match ends {
             Some((a, b, pa, pb)) if pa.distance(start) <= tol && pb.distance(end) <= tol => (a, b),
@@ -86,6 +84,23 @@ impl TrimEdge {
     pub fn is_closed(&self) -> bool {
         self.start == self.end
     }
+}
+
+/// The parameter range a curve is defined on. A B-spline's is `[u_p, u_{n}]` (degree p, n
+/// control points), not its whole knot vector: an unclamped knot vector (OCCT writes closed
+/// curves with knots such as (1, 3, 2, …, 3, 1) over −0.145..1.119) has partial spans at both
+/// ends where the basis functions do not sum to one.
+fn curve_range(curve: &Curve3D) -> Option<(f64, f64)> {
+    match curve {
+        Curve3D::BSplineCurve(c) => clamped_range(c.knot_vec(), c.degree()),
+        Curve3D::NurbsCurve(c) => clamped_range(c.knot_vec(), c.degree()),
+        _ => curve.try_range_tuple(),
+    }
+}
+
+/// `[u_p, u_{len-1-p}]` of a knot vector of degree `p`.
+fn clamped_range(knots: &[f64], degree: usize) -> Option<(f64, f64)> {
+    (knots.len() > 2 * degree + 1).then(|| (knots[degree], knots[knots.len() - 1 - degree]))
 }
 
 /// Parameter of `p` on `curve` (within `tol`): truck's search, else Newton from the tangent
@@ -374,7 +389,30 @@ pub type Interval = Option<(f64, f64)>;
 
 /// The finite parameter range of a surface, per direction.
 pub fn parameter_bounds(s: &TruckSurface) -> (Interval, Interval) {
-    let (u, v) = s.try_range_tuple();
+    use truck_stepio::r#in::alias::SweptCurve;
+    let (mut u, mut v) = s.try_range_tuple();
+    // B-splines (and surfaces swept from them) end at their clamped knots (see `curve_range`).
+    match s {
+        TruckSurface::BSplineSurface(b) => {
+            (u, v) = (
+                clamped_range(&b.knot_vecs().0, b.udegree()),
+                clamped_range(&b.knot_vecs().1, b.vdegree()),
+            );
+        }
+        TruckSurface::NurbsSurface(b) => {
+            (u, v) = (
+                clamped_range(&b.knot_vecs().0, b.udegree()),
+                clamped_range(&b.knot_vecs().1, b.vdegree()),
+            );
+        }
+        TruckSurface::SweptCurve(c) => {
+            u = match c.as_ref() {
+                SweptCurve::ExtrudedCurve(e) => curve_range(e.entity_curve()),
+                SweptCurve::RevolutedCurve(r) => curve_range(r.entity().entity_curve()),
+            };
+        }
+        TruckSurface::ElementarySurface(_) => {}
+    }
     let finite = |r: Option<(f64, f64)>| r.filter(|(a, b)| a.is_finite() && b.is_finite());
     (finite(u), finite(v))
 }
