@@ -8,11 +8,14 @@
 //!    edge gives the same points to both faces when their ε agree. The vertices are the exact
 //!    STEP vertices.
 //! 2. **Parameter space** — each point is projected onto the surface (nearest parameter, from
-//!    the previous point), unwrapped across the seams of periodic surfaces; at poles (a
-//!    vanishing derivative) the free coordinate follows the neighbouring point. A segment is
-//!    split again until the surface at the middle of its parameter chord is within ε/2 of the
-//!    3D chord, so triangles along the border hold ε too. Loops that run around a periodic
-//!    surface are joined to a second such loop, or closed along a pole / the parameter range.
+//!    the previous point), unwrapped across the seams of periodic surfaces; where a loop runs
+//!    through a pole (a vanishing derivative) it runs along the pole line from the parameter
+//!    it came in with to the one it leaves with, on one sheet of a surface that covers itself
+//!    twice (`model::poles`). Loops that run around a periodic surface are joined to a second
+//!    such loop, or closed along a pole / the parameter range. Segments along a pole are split
+//!    into steps of the interior grid (a fan at the pole, not slivers across its opening), and
+//!    every segment is split again until the surface at the middle of its parameter chord is
+//!    within ε/2 of the 3D chord, so triangles along the border hold ε too.
 //! 3. **Interior** — a grid whose steps follow from ε and the largest second derivatives
 //!    sampled on the domain (`(M_uu h_u² + 2 M_uv h_u h_v + M_vv h_v²)/8 ≤ ε`), points
 //!    strictly inside the trimmed domain and away from its border.
@@ -32,6 +35,7 @@ use spade::handles::FixedVertexHandle;
 use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation};
 
 use super::{PatchMesh, Resolution};
+use crate::model::poles::{LoopPoint, expand_poles};
 use crate::model::trimmed::{
     Interval, LoopEdge, SurfaceEval, TrimmedFace, TruckSurface, parameter_bounds,
 };
@@ -71,6 +75,16 @@ struct BPoint {
     p: DVec3,
     uv: DVec2,
     src: Option<(u32, u32, f64)>,
+}
+
+impl LoopPoint for BPoint {
+    fn uv(&self) -> DVec2 {
+        self.uv
+    }
+
+    fn with_uv(self, uv: DVec2) -> Self {
+        BPoint { uv, ..self }
+    }
 }
 
 /// Reusable trimmed-face tessellator (keeps its scratch buffers).
@@ -144,17 +158,21 @@ impl TrimmedTessellator {
         let mut loops = std::mem::take(&mut self.loops);
         close_wrapping_loops(face, &mut loops)?;
         align_loops(face, &mut loops);
+        if loops.iter().all(|l| l.len() < 2) {
+            return Err(TrimError::EmptyDomain);
+        }
+
+        // 3: interior grid (its steps also split the border along poles).
+        let (lo, hi) = uv_box(&loops);
+        let (scale, steps) = grid_steps(s, lo, hi, eps);
+        let grid_step = (hi - lo) / DVec2::new(steps.0 as f64, steps.1 as f64);
         for lp in loops.iter_mut() {
+            split_poles(face, lp, grid_step);
             refine_border(face, lp, eps * 0.5, shared_borders);
-            fix_poles(s, lp);
         }
         if loops.iter().all(|l| l.len() < 3) {
             return Err(TrimError::EmptyDomain);
         }
-
-        // 3: interior grid.
-        let (lo, hi) = uv_box(&loops);
-        let (scale, steps) = grid_steps(s, lo, hi, eps);
         let segs = segments(&loops);
 
         // 4: constrained Delaunay in scaled parameter space.
@@ -474,6 +492,8 @@ impl TrimmedTessellator {
                 });
             }
         }
+        // A loop through a pole runs along the pole line there.
+        expand_poles(face, &mut pts);
         // The loop closes on its first point: drop a repeated last point.
         if pts.len() > 1
             && let (Some(f), Some(l)) = (pts.first(), pts.last())
@@ -737,6 +757,44 @@ fn singular_range(s: &impl SurfaceEval, uv: DVec2, along_u: bool) -> Option<(f64
     apex.is_finite().then_some((apex.min(t0), apex.max(t0)))
 }
 
+/// Splits the segments of `lp` that run along a pole line (both ends the same 3D point, the
+/// parameters apart: see `model::poles`) into steps of at most `step` (the interior grid's
+/// steps in u and v), so that the triangles at the pole form a fan around it instead of
+/// slivers spanning the whole opening angle (no chord test ever splits such a segment).
+fn split_poles(face: &TrimmedFace, lp: &mut Vec<BPoint>, step: DVec2) {
+    let n = lp.len();
+    if n < 2 {
+        return;
+    }
+    let tiny = 1e-9 * face.bounds.radius.max(1e-300);
+    let mut out: Vec<BPoint> = Vec::with_capacity(n);
+    for k in 0..n {
+        let (a, b) = (lp[k], lp[(k + 1) % n]);
+        out.push(a);
+        let d = b.uv - a.uv;
+        if a.p.distance(b.p) > tiny || d.length() == 0.0 {
+            continue;
+        }
+        // Along the pole: the surface at the middle is the pole point too.
+        let mid = face.point(0.5 * (a.uv + b.uv));
+        if mid.distance(a.p) > tiny.max(1e-7 * face.bounds.radius) {
+            continue;
+        }
+        let pieces = (d.x.abs() / step.x.max(1e-300))
+            .max(d.y.abs() / step.y.max(1e-300))
+            .ceil()
+            .clamp(1.0, 4096.0) as usize;
+        for s in 1..pieces {
+            out.push(BPoint {
+                p: a.p,
+                uv: a.uv + d * (s as f64 / pieces as f64),
+                src: None,
+            });
+        }
+    }
+    *lp = out;
+}
+
 /// Splits border segments until the surface at the parameter midpoint is within `tol` of the
 /// 3D chord midpoint (so the triangles along the border hold the tolerance too). With
 /// `only_closing`, segments between two edge points are kept (shared-border mode).
@@ -793,42 +851,6 @@ fn refine_border(face: &TrimmedFace, lp: &mut Vec<BPoint>, tol: f64, only_closin
             },
         };
         lp.insert(k + 1, m);
-    }
-}
-
-/// At poles (a parameter derivative vanishes) the free coordinate of a border point is
-/// arbitrary: take the neighbour's, so the border runs straight into the pole.
-fn fix_poles(s: &impl SurfaceEval, lp: &mut [BPoint]) {
-    let n = lp.len();
-    if n < 3 {
-        return;
-    }
-    let scale = lp
-        .iter()
-        .map(|b| {
-            let (du, dv) = s.derivs(b.uv);
-            du.length().max(dv.length())
-        })
-        .fold(0.0, f64::max);
-    let tiny = scale * 1e-7;
-    for k in 0..n {
-        let (du, dv) = s.derivs(lp[k].uv);
-        let prev = lp[(k + n - 1) % n].uv;
-        let next = lp[(k + 1) % n].uv;
-        if du.length() <= tiny {
-            // u is free: follow the neighbour on the longer side in v... keep continuity.
-            lp[k].uv.x = if (prev.y - lp[k].uv.y).abs() > (next.y - lp[k].uv.y).abs() {
-                prev.x
-            } else {
-                next.x
-            };
-        } else if dv.length() <= tiny {
-            lp[k].uv.y = if (prev.x - lp[k].uv.x).abs() > (next.x - lp[k].uv.x).abs() {
-                prev.y
-            } else {
-                next.y
-            };
-        }
     }
 }
 
