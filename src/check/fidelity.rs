@@ -19,14 +19,28 @@
 //! 4. the sample's error is `d` inside, and its 3D distance to the boundary curves outside
 //!    (the nearest point of the trimmed face then lies on its boundary).
 //!
-//! The worst sample over the face is returned with its position, so `stats` can name faces.
-//! What it does not do: samples are points, not a proof (a spike between samples 1/6 of a
-//! triangle side apart is missed); a surface read wrongly (both the tessellator and this
-//! measure evaluate the same surface) is the business of the checks against the file's own
-//! edges and of the Open CASCADE cross-check in `tools/occt_fidelity.py`.
+//! Where a loop runs through a pole (a sphere's, a cone's apex, a B-spline side collapsed to a
+//! point) it runs along the pole line in parameter space (`model::poles`, a segment that is no
+//! boundary in 3D), and where the surface covers itself twice (a sphere, a circle swept about
+//! its diameter) a sample is judged on the sheet the loops lie on.
+//!
+//! That is the distance from the mesh to the face; a mesh can be close to its face everywhere
+//! and still leave part of the face out (a sphere cap whose triangles at the pole are slivers
+//! spanning the whole opening angle). So the face is sampled too — a grid over its loops'
+//! parameter box, the samples inside the trim, at most [`MAX_FACE_SAMPLES`] of them and no
+//! closer than ε/2 — and each face point's distance to the mesh (nearest triangle, through a
+//! grid of cells) is the geometry missing there ([`FaceFidelity::missing`]).
+//!
+//! The worst sample over the face (either way) is returned with its position, so `stats` can
+//! name faces. What it does not do: samples are points, not a proof (a spike between samples
+//! 1/6 of a triangle side apart is missed, and so is a hole between face samples); a surface
+//! read wrongly (both the tessellator and this measure evaluate the same surface) is the
+//! business of the checks against the file's own edges and of the Open CASCADE cross-check in
+//! `tools/occt_fidelity.py`.
 
 use glam::{DMat4, DVec2, DVec3};
 
+use crate::model::poles::{self, Pole};
 use crate::model::trimmed::{SurfaceEval, TrimmedFace, TruckSurface};
 use crate::tessellate::PatchMesh;
 
@@ -36,6 +50,8 @@ pub const SAMPLES_PER_SIDE: usize = 6;
 pub const LOOP_FRACTION: f64 = 1.0 / 16.0;
 /// Most samples per face (larger meshes are sampled with fewer steps per side).
 pub const MAX_SAMPLES: usize = 400_000;
+/// Most samples of the face itself (for [`FaceFidelity::missing`]) per face.
+pub const MAX_FACE_SAMPLES: usize = 4096;
 
 /// The measured distance of one face's tessellation to the trimmed face.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -55,7 +71,14 @@ pub struct FaceFidelity {
     pub outside: usize,
     /// Samples taken.
     pub samples: usize,
-    /// Where the worst sample is (face units).
+    /// Largest distance from a sample of the trimmed face to the mesh: geometry the mesh
+    /// leaves out (face units; part of `error`).
+    pub missing: f64,
+    /// Samples of the face farther than ε from the mesh.
+    pub uncovered: usize,
+    /// Samples of the face taken.
+    pub face_samples: usize,
+    /// Where the worst sample is, on the mesh or on the face (face units).
     pub worst_at: DVec3,
 }
 
@@ -162,6 +185,9 @@ pub fn measure(
         surface_error: 0.0,
         outside: 0,
         samples: 0,
+        missing: 0.0,
+        uncovered: 0,
+        face_samples: 0,
         worst_at: DVec3::ZERO,
     };
     let mut vertex_uv: Vec<Option<DVec2>> = vec![None; positions.len()];
@@ -209,7 +235,7 @@ pub fn measure(
                 };
                 prev = uv;
                 let d = face.point(uv).distance(p);
-                let err = if boundary.inside(face, uv) {
+                let err = if boundary.inside(face, boundary.on_sheet(face, uv)) {
                     out.surface_error = out.surface_error.max(d);
                     d
                 } else {
@@ -223,7 +249,225 @@ pub fn measure(
             }
         }
     }
+    cover(face, &boundary, positions, triangles, eps, &mut out);
     Some(out)
+}
+
+/// The face's own samples against the mesh: [`FaceFidelity::missing`].
+fn cover(
+    face: &TrimmedFace,
+    boundary: &Boundary,
+    positions: &[DVec3],
+    triangles: &[[u32; 3]],
+    eps: f64,
+    out: &mut FaceFidelity,
+) {
+    let Some((lo, hi)) = boundary.parameter_box(face) else {
+        return;
+    };
+    let size = (hi - lo) * boundary.metric;
+    if !(size.x.is_finite() && size.y.is_finite()) {
+        return;
+    }
+    let area = size.x.max(eps) * size.y.max(eps);
+    let h = (0.5 * eps).max((area / MAX_FACE_SAMPLES as f64).sqrt());
+    let steps = |len: f64| ((len / h).ceil() as usize).clamp(1, MAX_FACE_SAMPLES);
+    let (nu, nv) = (steps(size.x), steps(size.y));
+    let (nu, nv) = if nu * nv > 2 * MAX_FACE_SAMPLES {
+        let f = ((nu * nv) as f64 / MAX_FACE_SAMPLES as f64).sqrt();
+        (
+            ((nu as f64 / f) as usize).max(1),
+            ((nv as f64 / f) as usize).max(1),
+        )
+    } else {
+        (nu, nv)
+    };
+    let grid = TriangleGrid::new(positions, triangles);
+    for i in 0..nu {
+        for j in 0..nv {
+            let uv = lo
+                + (hi - lo)
+                    * DVec2::new((i as f64 + 0.5) / nu as f64, (j as f64 + 0.5) / nv as f64);
+            if !boundary.inside_strictly(face, uv) {
+                continue;
+            }
+            let q = face.point(uv);
+            if !q.is_finite() {
+                continue;
+            }
+            let d = grid.distance(q);
+            out.face_samples += 1;
+            out.missing = out.missing.max(d);
+            if d > eps {
+                out.uncovered += 1;
+            }
+            record(out, d, q);
+        }
+    }
+}
+
+/// A mesh's triangles binned in a grid of cubic cells (each triangle in every cell its box
+/// overlaps), for nearest-triangle distances.
+struct TriangleGrid<'a> {
+    positions: &'a [DVec3],
+    triangles: &'a [[u32; 3]],
+    lo: DVec3,
+    cell: f64,
+    dims: [usize; 3],
+    /// Per cell, the range of `items` holding its triangles.
+    start: Vec<u32>,
+    items: Vec<u32>,
+}
+
+impl<'a> TriangleGrid<'a> {
+    /// Most cells per axis.
+    const MAX_DIM: usize = 32;
+
+    fn new(positions: &'a [DVec3], triangles: &'a [[u32; 3]]) -> TriangleGrid<'a> {
+        let corners = |t: &[u32; 3]| t.map(|i| positions[i as usize]);
+        let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+        for t in triangles {
+            for p in corners(t) {
+                lo = lo.min(p);
+                hi = hi.max(p);
+            }
+        }
+        let extent = (hi - lo).max_element();
+        let cell = if extent.is_finite() && extent > 0.0 {
+            // About one triangle per occupied cell, for a mesh that is a surface.
+            let per_axis = (triangles.len() as f64).sqrt().ceil().max(1.0);
+            extent / per_axis.min(Self::MAX_DIM as f64)
+        } else {
+            1.0
+        };
+        let dim = |d: f64| ((d / cell).floor() as usize + 1).clamp(1, Self::MAX_DIM);
+        let size = hi - lo;
+        let dims = if lo.is_finite() {
+            [dim(size.x), dim(size.y), dim(size.z)]
+        } else {
+            [1, 1, 1]
+        };
+        let mut grid = TriangleGrid {
+            positions,
+            triangles,
+            lo: if lo.is_finite() { lo } else { DVec3::ZERO },
+            cell,
+            dims,
+            start: Vec::new(),
+            items: Vec::new(),
+        };
+        let n = dims[0] * dims[1] * dims[2];
+        let mut count = vec![0u32; n + 1];
+        let cells_of = |g: &TriangleGrid<'_>, t: &[u32; 3]| {
+            let c = corners(t);
+            let a = g.cell_of(c[0].min(c[1]).min(c[2]));
+            let b = g.cell_of(c[0].max(c[1]).max(c[2]));
+            (a, b)
+        };
+        for t in triangles {
+            let (a, b) = cells_of(&grid, t);
+            for x in a[0]..=b[0] {
+                for y in a[1]..=b[1] {
+                    for z in a[2]..=b[2] {
+                        count[grid.index([x, y, z]) + 1] += 1;
+                    }
+                }
+            }
+        }
+        for k in 1..=n {
+            count[k] += count[k - 1];
+        }
+        let mut fill = count.clone();
+        let mut items = vec![0u32; count[n] as usize];
+        for (ti, t) in triangles.iter().enumerate() {
+            let (a, b) = cells_of(&grid, t);
+            for x in a[0]..=b[0] {
+                for y in a[1]..=b[1] {
+                    for z in a[2]..=b[2] {
+                        let c = grid.index([x, y, z]);
+                        items[fill[c] as usize] = ti as u32;
+                        fill[c] += 1;
+                    }
+                }
+            }
+        }
+        grid.start = count;
+        grid.items = items;
+        grid
+    }
+
+    fn cell_of(&self, p: DVec3) -> [usize; 3] {
+        let c = (p - self.lo) / self.cell;
+        let f = |x: f64, d: usize| {
+            if x.is_nan() {
+                0
+            } else {
+                (x.floor().max(0.0) as usize).min(d - 1)
+            }
+        };
+        [
+            f(c.x, self.dims[0]),
+            f(c.y, self.dims[1]),
+            f(c.z, self.dims[2]),
+        ]
+    }
+
+    fn index(&self, c: [usize; 3]) -> usize {
+        (c[0] * self.dims[1] + c[1]) * self.dims[2] + c[2]
+    }
+
+    fn triangle_distance(&self, q: DVec3, t: u32) -> f64 {
+        let [a, b, c] = self.triangles[t as usize].map(|i| self.positions[i as usize]);
+        crate::geom::point_triangle_distance(q, a, b, c)
+    }
+
+    /// Distance from `q` to the nearest triangle: cells in rings around `q`'s cell until no
+    /// triangle outside the rings can be nearer.
+    fn distance(&self, q: DVec3) -> f64 {
+        let c = self.cell_of(q);
+        let mut best = f64::INFINITY;
+        let max_k = *self.dims.iter().max().unwrap_or(&1);
+        for k in 0..=max_k {
+            // A ring as large as the mesh: every triangle once instead.
+            if (2 * k + 1).pow(3) > self.triangles.len() {
+                return (0..self.triangles.len() as u32)
+                    .map(|t| self.triangle_distance(q, t))
+                    .fold(best, f64::min);
+            }
+            let range = |i: usize| (c[i].saturating_sub(k), (c[i] + k).min(self.dims[i] - 1));
+            let (rx, ry, rz) = (range(0), range(1), range(2));
+            for x in rx.0..=rx.1 {
+                for y in ry.0..=ry.1 {
+                    for z in rz.0..=rz.1 {
+                        let ring = x.abs_diff(c[0]).max(y.abs_diff(c[1])).max(z.abs_diff(c[2]));
+                        if ring != k {
+                            continue;
+                        }
+                        let cell = self.index([x, y, z]);
+                        let (s, e) = (self.start[cell] as usize, self.start[cell + 1] as usize);
+                        for &t in &self.items[s..e] {
+                            best = best.min(self.triangle_distance(q, t));
+                        }
+                    }
+                }
+            }
+            // Untested triangles lie outside the rings' box: at least this far, across its
+            // faces inside the grid (nothing lies beyond the grid's own faces).
+            let mut bound = f64::INFINITY;
+            for (i, (a, b)) in [rx, ry, rz].into_iter().enumerate() {
+                if a > 0 {
+                    bound = bound.min(q[i] - (self.lo[i] + a as f64 * self.cell));
+                }
+                if b + 1 < self.dims[i] {
+                    bound = bound.min(self.lo[i] + (b + 1) as f64 * self.cell - q[i]);
+                }
+            }
+            if best <= bound.max(0.0) || bound == f64::INFINITY {
+                return best;
+            }
+        }
+        best
+    }
 }
 
 fn record(out: &mut FaceFidelity, err: f64, p: DVec3) {
@@ -246,12 +490,62 @@ struct Boundary {
     /// An odd number of loops runs around the periodic direction (or both directions are
     /// periodic): even-odd has no ray out of the domain, the side test decides.
     wraps: bool,
+    /// Pole lines across which the surface folds onto itself, with the side (±1 along the
+    /// fixed parameter) the loops lie on.
+    sheets: Vec<(Pole, f64)>,
+}
+
+impl poles::LoopPoint for (DVec3, DVec2, bool) {
+    fn uv(&self) -> DVec2 {
+        self.1
+    }
+
+    fn with_uv(self, uv: DVec2) -> Self {
+        (self.0, uv, self.2)
+    }
+
+    fn along_pole(self) -> Self {
+        (self.0, self.1, true)
+    }
+}
+
+/// The pole lines a loop expanded by [`poles::expand_poles`] runs along, where the surface
+/// folds across them, with the side of the line the loop lies on.
+fn sheet_sides(face: &TrimmedFace, lp: &[(DVec3, DVec2, bool)]) -> Vec<(Pole, f64)> {
+    let n = lp.len();
+    let mut out: Vec<(Pole, f64)> = Vec::new();
+    for k in 0..n {
+        let (a, b) = (lp[k], lp[(k + 1) % n]);
+        if !a.2 || a.0.distance(b.0) > 0.0 {
+            continue;
+        }
+        let d = b.1 - a.1;
+        let free = if d.x.abs() >= d.y.abs() { 0 } else { 1 };
+        let pole = Pole {
+            free,
+            at: a.1[1 - free],
+        };
+        if face.fold(a.1, pole).is_none() || out.iter().any(|(p, _)| *p == pole) {
+            continue;
+        }
+        // The side of the neighbours that leave the line.
+        let off = lp
+            .iter()
+            .map(|q| q.1[1 - free] - pole.at)
+            .max_by(|x, y| x.abs().total_cmp(&y.abs()))
+            .unwrap_or(0.0);
+        if off != 0.0 {
+            out.push((pole, off.signum()));
+        }
+    }
+    out
 }
 
 impl Boundary {
     fn build(face: &TrimmedFace, tol: f64) -> Boundary {
         let periods = face.periods();
         let mut loops = Vec::new();
+        let mut sheets = Vec::new();
         let mut speeds = DVec2::ZERO;
         let mut count = 0.0;
         // A seam (an edge the face uses twice, once each way) is no boundary: the face lies
@@ -318,6 +612,11 @@ impl Boundary {
                 out.push((p, uv, seam));
                 prev = Some(uv);
             }
+            // Through a pole the loop runs along the pole line (no boundary in 3D: a segment
+            // flagged like a seam), on the sheet where the face lies on its `domain_left`.
+            if poles::expand_poles(face, &mut out) {
+                sheets.extend(sheet_sides(face, &out));
+            }
             if let (Some(&first), Some(&(_, last, _))) = (out.first(), out.last()) {
                 out.push((first.0, unwrap_near(first.1, last, periods), false));
                 loops.push(out);
@@ -340,12 +639,38 @@ impl Boundary {
         // Even-odd needs a ray that leaves the domain: along a direction that is not periodic,
         // and an even number of loops running around the periodic one.
         let wraps = wrapping % 2 == 1 || (periods.0.is_some() && periods.1.is_some());
+
         Boundary {
             loops,
             periods,
             metric,
             wraps,
+            sheets,
         }
+    }
+
+    /// `uv` moved onto the sheet the loops lie on, where the surface covers itself twice (a
+    /// sample's projection may land on either).
+    fn on_sheet(&self, face: &TrimmedFace, mut uv: DVec2) -> DVec2 {
+        for &(pole, side) in &self.sheets {
+            let fixed = 1 - pole.free;
+            let period = if fixed == 0 {
+                self.periods.0
+            } else {
+                self.periods.1
+            };
+            if let Some(p) = period.filter(|p| *p > 0.0) {
+                // Next to the middle of the sheet (half a period wide between two poles).
+                let mid = pole.at + side * 0.25 * p;
+                uv[fixed] -= ((uv[fixed] - mid) / p).round() * p;
+            }
+            if (uv[fixed] - pole.at) * side < 0.0
+                && let Some(folded) = face.fold(uv, pole)
+            {
+                uv = folded;
+            }
+        }
+        uv
     }
 
     /// Whether `uv` lies in the trimmed domain: by the side of the nearest boundary segment,
@@ -354,6 +679,14 @@ impl Boundary {
         if self.wraps {
             return self.inside_by_side(face, uv);
         }
+        // Files do not always orient their loops consistently (even-odd does not care) and
+        // sampled loops can graze a sample (a ray through a vertex): a sample counts as
+        // outside only when the side of its nearest boundary agrees.
+        self.inside_by_parity(uv) || self.inside_by_side(face, uv)
+    }
+
+    /// Even-odd over the loops (meaningful when no loop runs around the surface).
+    fn inside_by_parity(&self, uv: DVec2) -> bool {
         // The ray runs along `r`, crossings are found on `c` (taken modulo its period, if any).
         let (pu, pv) = self.periods;
         let (c, r, period) = if pu.is_some() { (0, 1, pu) } else { (1, 0, pv) };
@@ -373,10 +706,37 @@ impl Boundary {
                 }
             }
         }
-        // Files do not always orient their loops consistently (even-odd does not care) and
-        // sampled loops can graze a sample (a ray through a vertex): a sample counts as
-        // outside only when the side of its nearest boundary agrees.
-        odd || self.inside_by_side(face, uv)
+        odd
+    }
+
+    /// Whether `uv` lies in the trimmed domain by every test that applies (for the face's
+    /// own samples: a point near a boundary that only one test puts inside is left out).
+    fn inside_strictly(&self, face: &TrimmedFace, uv: DVec2) -> bool {
+        self.inside_by_side(face, uv) && (self.wraps || self.inside_by_parity(uv))
+    }
+
+    /// The parameter box of the loops; where a loop runs around the surface, extended along
+    /// the other direction to the end of a sphere's or B-spline's parameter range (the face
+    /// reaches a pole or the end of the surface there).
+    fn parameter_box(&self, face: &TrimmedFace) -> Option<(DVec2, DVec2)> {
+        let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
+        for (_, uv, _) in self.loops.iter().flatten() {
+            lo = lo.min(*uv);
+            hi = hi.max(*uv);
+        }
+        if !(lo.is_finite() && hi.is_finite()) {
+            return None;
+        }
+        if self.wraps && matches!(surface_kind(&face.surface), "sphere" | "b-spline" | "nurbs") {
+            let (ru, rv) = crate::model::trimmed::parameter_bounds(&face.surface);
+            for (axis, range, period) in [(0, ru, self.periods.0), (1, rv, self.periods.1)] {
+                if let (Some((a, b)), None) = (range, period) {
+                    lo[axis] = lo[axis].min(a);
+                    hi[axis] = hi[axis].max(b);
+                }
+            }
+        }
+        Some((lo, hi))
     }
 
     /// Smallest 3D distance from `p` to the boundary polylines.
