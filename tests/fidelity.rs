@@ -322,6 +322,52 @@ fn the_measure_sees_a_sphere_octant_drawn_over_the_wrong_octant() {
     assert!(wrong.outside > 0 && wrong.ratio() > 10.0, "{wrong:?}");
 }
 
+/// The measure sees geometry a mesh leaves out: cube_filet's octant mesh (from the sphere's
+/// formula) without its triangles within 0.3 rad of the pole lies on the face everywhere, so
+/// only the face's own samples against the mesh show the hole (about 30 ε across).
+#[test]
+fn the_measure_sees_a_sphere_octant_with_its_pole_left_out() {
+    let scene = common::load("corpus/cube_filet.stp");
+    let face = scene
+        .patches
+        .iter()
+        .find_map(|p| match &p.surface {
+            PatchSurface::Trimmed(f) if f.id == 477 => Some(f.clone()),
+            _ => None,
+        })
+        .expect("face #477");
+    const N: usize = 16;
+    let (c, r) = (DVec3::new(90.0, 10.0, 10.0), 10.0);
+    let pos = sphere_patch(
+        c,
+        r,
+        (DVec3::NEG_Z, DVec3::X),
+        std::f64::consts::FRAC_PI_2,
+        (0.0, std::f64::consts::FRAC_PI_2),
+        N,
+    );
+    let pole = c - DVec3::Z * r;
+    let near_pole = |i: u32| pos[i as usize].distance(pole) < 2.0 * r * (0.3f64 / 2.0).sin();
+    let mut tris = Vec::new();
+    for i in 0..N as u32 {
+        for j in 0..N as u32 {
+            let k = |i: u32, j: u32| i * (N as u32 + 1) + j;
+            for t in [
+                [k(i, j), k(i + 1, j), k(i + 1, j + 1)],
+                [k(i, j), k(i + 1, j + 1), k(i, j + 1)],
+            ] {
+                if !t.iter().any(|&v| near_pole(v)) {
+                    tris.push(t);
+                }
+            }
+        }
+    }
+    let eps = 0.1;
+    let holed = measure(&face, &pos, &tris, eps).expect("measured");
+    assert!(holed.outside == 0, "{holed:?}");
+    assert!(holed.ratio() > 10.0 && holed.uncovered > 0, "{holed:?}");
+}
+
 /// TFBGA's balls: a sphere (r 0.21) cut by a circle, the face the cap below it bounded by the
 /// circle and a seam down to the pole. The loop must run along the whole pole line, split, so
 /// that the cap is closed at its pole.
