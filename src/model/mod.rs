@@ -5,6 +5,7 @@
 
 pub mod bezier;
 pub mod mesh;
+pub mod poles;
 pub mod trimmed;
 
 use std::sync::Arc;

@@ -285,6 +285,34 @@ impl TrimmedFace {
         uv.is_finite().then_some(uv)
     }
 
+    /// A sphere's parameter with the latitude in `[−π/2, π/2]` (truck's sphere extends past its
+    /// poles: `(u, v)` beyond a pole is the point `(u + π, ±π − v)`), so that loops and
+    /// samples of one face agree on which of the two parameters a point has.
+    fn canonical(&self, uv: DVec2) -> DVec2 {
+        use std::f64::consts::{FRAC_PI_2, PI};
+        use truck_stepio::r#in::alias::ElementarySurface;
+        let TruckSurface::ElementarySurface(e) = &self.surface else {
+            return uv;
+        };
+        if !matches!(**e, ElementarySurface::Sphere(_)) {
+            return uv;
+        }
+        // Fold the latitude into (−π, π] first, then across the nearer pole.
+        let mut v = (uv.y + PI).rem_euclid(2.0 * PI) - PI;
+        let mut u = uv.x;
+        if v > FRAC_PI_2 {
+            v = PI - v;
+            u += PI;
+        } else if v < -FRAC_PI_2 {
+            v = -PI - v;
+            u += PI;
+        }
+        if (uv.y - v).abs() < 1e-15 {
+            return uv;
+        }
+        DVec2::new(u, v)
+    }
+
     fn wrap(&self, uv: DVec2) -> DVec2 {
         let w = |x: f64, c: Interval| match c {
             Some((a, p)) if p > 0.0 => a + (x - a).rem_euclid(p),
@@ -321,11 +349,48 @@ impl SurfaceEval for TrimmedFace {
             .project(p, start)
             .map(|uv| self.wrap(uv))
             .and_then(|uv| self.newton(p, uv));
-        let off = |uv: &DVec2| self.point(*uv).distance_squared(p);
-        truck
+        let off = |uv: &DVec2| self.point(*uv).distance(p);
+        let mut found: Vec<DVec2> = truck
             .into_iter()
             .chain(guesses.iter().filter_map(|g| self.newton(p, *g)))
-            .min_by(|a, b| off(a).total_cmp(&off(b)))
+            .map(|uv| self.canonical(uv))
+            .collect();
+        let mut best = found
+            .iter()
+            .copied()
+            .min_by(|a, b| off(a).total_cmp(&off(b)))?;
+        if let Some(pole) = self.stalled_at_pole(best, p) {
+            let starts: Vec<DVec2> = self.around_pole(best, pole).collect();
+            found.extend(
+                starts
+                    .into_iter()
+                    .filter_map(|g| self.newton(p, g))
+                    .map(|uv| self.canonical(uv)),
+            );
+            best = found
+                .iter()
+                .copied()
+                .min_by(|a, b| off(a).total_cmp(&off(b)))?;
+        }
+        let Some(h) = hint else {
+            return Some(best);
+        };
+        // Where the surface covers itself twice (past a sphere's pole), several parameters
+        // are equally near: the one nearest the hint keeps a polyline on one sheet.
+        let tie = off(&best) + 1e-9 * self.bounds.radius.max(1e-300);
+        let (pu, pv) = self.periods();
+        let from_hint = |uv: &DVec2| {
+            let d = *uv - h;
+            let w = |x: f64, p: Option<f64>| match p {
+                Some(p) if p > 0.0 => x - (x / p).round() * p,
+                _ => x,
+            };
+            DVec2::new(w(d.x, pu), w(d.y, pv)).length_squared()
+        };
+        found
+            .into_iter()
+            .filter(|uv| off(uv) <= tie)
+            .min_by(|a, b| from_hint(a).total_cmp(&from_hint(b)))
     }
 
     fn periods(&self) -> (Option<f64>, Option<f64>) {
@@ -417,11 +482,29 @@ pub fn parameter_bounds(s: &TruckSurface) -> (Interval, Interval) {
     (finite(u), finite(v))
 }
 
-/// Where a surface really ends: the knot range of a B-spline surface; `None` for analytic
-/// surfaces, whose reported range is nominal (truck gives a cone or a plane `0..1`).
+/// Where a surface really ends: the knot range of a B-spline surface, and of the B-spline
+/// curve a swept surface sweeps (beyond it truck extrapolates the curve: a surface of
+/// revolution past the pole where its profile meets the axis); `None` for analytic
+/// surfaces and lines, whose reported range is nominal (truck gives a cone, a plane or a
+/// line `0..1`, an extrusion `0..1` along its vector).
 pub fn knot_bounds(s: &TruckSurface) -> (Interval, Interval) {
+    use truck_stepio::r#in::alias::SweptCurve;
+    let bspline = |c: &Curve3D| matches!(c, Curve3D::BSplineCurve(_) | Curve3D::NurbsCurve(_));
+    let (ru, rv) = parameter_bounds(s);
     match s {
-        TruckSurface::BSplineSurface(_) | TruckSurface::NurbsSurface(_) => parameter_bounds(s),
+        TruckSurface::BSplineSurface(_) | TruckSurface::NurbsSurface(_) => (ru, rv),
+        TruckSurface::SweptCurve(swept) => match swept.as_ref() {
+            // truck-stepio inverts a revolution (u the angle, v the curve) unless inverted back.
+            SweptCurve::RevolutedCurve(p) if bspline(p.entity().entity_curve()) => {
+                if p.orientation() {
+                    (ru, None)
+                } else {
+                    (None, rv)
+                }
+            }
+            SweptCurve::ExtrudedCurve(e) if bspline(e.entity_curve()) => (ru, None),
+            _ => (None, None),
+        },
         _ => (None, None),
     }
 }

@@ -56,18 +56,23 @@ pub fn run(args: &StatsArgs) -> Result<(), CliError> {
     if !faces.is_empty() {
         let samples: usize = faces.iter().map(|f| f.1.samples).sum();
         let outside: usize = faces.iter().map(|f| f.1.outside).sum();
+        let face_samples: usize = faces.iter().map(|f| f.1.face_samples).sum();
+        let uncovered: usize = faces.iter().map(|f| f.1.uncovered).sum();
         println!(
             "trimmed error/eps {:.3} (against the trimmed faces, {samples} samples; {outside} \
-             outside their trim by more than eps)",
+             outside their trim by more than eps; {face_samples} face samples, {uncovered} \
+             farther than eps from the mesh)",
             faces[0].1.ratio()
         );
         for (patch, f) in faces.iter().take(args.faces) {
             println!(
-                "  face #{:<8} {:<9} error/eps {:>7.3}  outside {:>5}  patch {patch}",
+                "  face #{:<8} {:<9} error/eps {:>7.3}  outside {:>5}  missing/eps {:>7.3}  \
+                 patch {patch}",
                 f.face,
                 f.surface,
                 f.ratio(),
-                f.outside
+                f.outside,
+                f.missing / f.eps.max(f64::MIN_POSITIVE)
             );
         }
     }

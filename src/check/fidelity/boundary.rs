@@ -1,0 +1,357 @@
+//! The trimmed face's boundary for the fidelity measure: its loops rebuilt from the exact
+//! edge curves at ε/16, unwrapped onto one sheet (seams and pole lines are not boundary), and
+//! the inside test (side of the nearest non-seam segment, or even-odd where the loops allow).
+
+use super::*;
+
+/// The face's trim loops, rebuilt from the edge curves: 3D polylines and their unwrapped
+/// parameter-space images.
+#[derive(Debug, Default)]
+pub(super) struct Boundary {
+    /// Per loop: (3D point, parameter, whether the segment from here to the next point runs
+    /// along a seam), closed (the first point repeated, unwrapped).
+    loops: Vec<Vec<(DVec3, DVec2, bool)>>,
+    periods: (Option<f64>, Option<f64>),
+    /// Scales of u and v that make parameter distances roughly 3D distances.
+    pub(super) metric: DVec2,
+    /// An odd number of loops runs around the periodic direction (or both directions are
+    /// periodic): even-odd has no ray out of the domain, the side test decides.
+    wraps: bool,
+    /// Pole lines across which the surface folds onto itself, with the side (±1 along the
+    /// fixed parameter) the loops lie on.
+    sheets: Vec<(Pole, f64)>,
+}
+
+impl poles::LoopPoint for (DVec3, DVec2, bool) {
+    fn uv(&self) -> DVec2 {
+        self.1
+    }
+
+    fn with_uv(self, uv: DVec2) -> Self {
+        (self.0, uv, self.2)
+    }
+
+    fn along_pole(self) -> Self {
+        (self.0, self.1, true)
+    }
+}
+
+/// The pole lines a loop expanded by [`poles::expand_poles`] runs along, where the surface
+/// folds across them, with the side of the line the loop lies on.
+pub(super) fn sheet_sides(face: &TrimmedFace, lp: &[(DVec3, DVec2, bool)]) -> Vec<(Pole, f64)> {
+    let n = lp.len();
+    let mut out: Vec<(Pole, f64)> = Vec::new();
+    for k in 0..n {
+        let (a, b) = (lp[k], lp[(k + 1) % n]);
+        if !a.2 || a.0.distance(b.0) > 0.0 {
+            continue;
+        }
+        let d = b.1 - a.1;
+        let free = if d.x.abs() >= d.y.abs() { 0 } else { 1 };
+        let pole = Pole {
+            free,
+            at: a.1[1 - free],
+        };
+        if face.fold(a.1, pole).is_none() || out.iter().any(|(p, _)| *p == pole) {
+            continue;
+        }
+        // The side of the neighbours that leave the line.
+        let off = lp
+            .iter()
+            .map(|q| q.1[1 - free] - pole.at)
+            .max_by(|x, y| x.abs().total_cmp(&y.abs()))
+            .unwrap_or(0.0);
+        if off != 0.0 {
+            out.push((pole, off.signum()));
+        }
+    }
+    out
+}
+
+impl Boundary {
+    pub(super) fn build(face: &TrimmedFace, tol: f64) -> Boundary {
+        let periods = face.periods();
+        let mut loops = Vec::new();
+        let mut sheets = Vec::new();
+        let mut speeds = DVec2::ZERO;
+        let mut count = 0.0;
+        // A seam (an edge the face uses twice, once each way) is no boundary: the face lies
+        // on both of its sides.
+        let mut uses: std::collections::HashMap<u64, usize> = std::collections::HashMap::new();
+        for le in face.loops.iter().flatten() {
+            *uses.entry(le.edge.id).or_default() += 1;
+        }
+        for lp in &face.loops {
+            let mut pts: Vec<(DVec3, bool)> = Vec::new();
+            for le in lp {
+                let e = &le.edge;
+                let (a, b) = if le.forward {
+                    (e.t0, e.t1)
+                } else {
+                    (e.t1, e.t0)
+                };
+                let mut ts = vec![a, b];
+                // Split until every chord is within `tol` of the curve at its midpoint.
+                let mut k = 0;
+                while k + 1 < ts.len() && ts.len() < 1 << 14 {
+                    let (t0, t1) = (ts[k], ts[k + 1]);
+                    let (p0, p1) = (e.point(t0), e.point(t1));
+                    let tm = 0.5 * (t0 + t1);
+                    let pm = e.point(tm);
+                    let chord = (p0 + p1) * 0.5;
+                    // Always split the first few times (a closed edge starts and ends at one
+                    // point).
+                    if pm.distance(chord) > tol || ts.len() < 9 {
+                        ts.insert(k + 1, tm);
+                    } else {
+                        k += 1;
+                    }
+                }
+                // The edge's own start vertex, then curve points; its end is the next edge's
+                // start.
+                let first = if le.forward { e.start } else { e.end };
+                let seam = uses.get(&e.id).is_some_and(|&n| n > 1);
+                let n = ts.len();
+                for (i, &t) in ts.iter().enumerate().take(n - 1) {
+                    pts.push((if i == 0 { first } else { e.point(t) }, seam));
+                }
+            }
+            if pts.len() < 2 {
+                continue;
+            }
+            let mut out: Vec<(DVec3, DVec2, bool)> = Vec::with_capacity(pts.len() + 1);
+            let mut prev: Option<DVec2> = None;
+            for &(p, seam) in &pts {
+                let Some(mut uv) = face.project(p, prev).or_else(|| face.project(p, None)) else {
+                    continue;
+                };
+                if let Some(q) = prev {
+                    uv = unwrap_near(uv, q, periods);
+                    if uv.distance_squared(q) == 0.0 {
+                        continue;
+                    }
+                }
+                let (su, sv) = face.derivs(uv);
+                if su.is_finite() && sv.is_finite() {
+                    speeds += DVec2::new(su.length(), sv.length());
+                    count += 1.0;
+                }
+                out.push((p, uv, seam));
+                prev = Some(uv);
+            }
+            // Through a pole the loop runs along the pole line (no boundary in 3D: a segment
+            // flagged like a seam), on the sheet where the face lies on its `domain_left`.
+            if poles::expand_poles(face, &mut out) {
+                sheets.extend(sheet_sides(face, &out));
+            }
+            if let (Some(&first), Some(&(_, last, _))) = (out.first(), out.last()) {
+                out.push((first.0, unwrap_near(first.1, last, periods), false));
+                loops.push(out);
+            }
+        }
+        let metric = if count > 0.0 {
+            (speeds / count).max(DVec2::splat(1e-12))
+        } else {
+            DVec2::ONE
+        };
+        let wrapping = loops
+            .iter()
+            .filter(|lp| {
+                let (Some(a), Some(b)) = (lp.first(), lp.last()) else {
+                    return false;
+                };
+                a.1.distance(b.1) > 1e-9 * (1.0 + a.1.length())
+            })
+            .count();
+        // Even-odd needs a ray that leaves the domain: along a direction that is not periodic,
+        // and an even number of loops running around the periodic one.
+        let wraps = wrapping % 2 == 1 || (periods.0.is_some() && periods.1.is_some());
+
+        Boundary {
+            loops,
+            periods,
+            metric,
+            wraps,
+            sheets,
+        }
+    }
+
+    /// `uv` moved onto the sheet the loops lie on, where the surface covers itself twice (a
+    /// sample's projection may land on either).
+    pub(super) fn on_sheet(&self, face: &TrimmedFace, mut uv: DVec2) -> DVec2 {
+        for &(pole, side) in &self.sheets {
+            let fixed = 1 - pole.free;
+            let period = if fixed == 0 {
+                self.periods.0
+            } else {
+                self.periods.1
+            };
+            if let Some(p) = period.filter(|p| *p > 0.0) {
+                // Next to the middle of the sheet (half a period wide between two poles).
+                let mid = pole.at + side * 0.25 * p;
+                uv[fixed] -= ((uv[fixed] - mid) / p).round() * p;
+            }
+            if (uv[fixed] - pole.at) * side < 0.0
+                && let Some(folded) = face.fold(uv, pole)
+            {
+                uv = folded;
+            }
+        }
+        uv
+    }
+
+    /// Whether `uv` lies in the trimmed domain: by the side of the nearest boundary segment,
+    /// and, when the loops allow it, by even-odd too (outside only when both say so).
+    pub(super) fn inside(&self, face: &TrimmedFace, uv: DVec2) -> bool {
+        if self.wraps {
+            return self.inside_by_side(face, uv);
+        }
+        // Files do not always orient their loops consistently (even-odd does not care) and
+        // sampled loops can graze a sample (a ray through a vertex): a sample counts as
+        // outside only when the side of its nearest boundary agrees.
+        self.inside_by_parity(uv) || self.inside_by_side(face, uv)
+    }
+
+    /// Even-odd over the loops (meaningful when no loop runs around the surface).
+    pub(super) fn inside_by_parity(&self, uv: DVec2) -> bool {
+        // The ray runs along `r`, crossings are found on `c` (taken modulo its period, if any).
+        let (pu, pv) = self.periods;
+        let (c, r, period) = if pu.is_some() { (0, 1, pu) } else { (1, 0, pv) };
+        let mut odd = false;
+        for lp in &self.loops {
+            for w in lp.windows(2) {
+                let (a, b) = (w[0].1, w[1].1);
+                let mut qc = uv[c];
+                if let Some(p) = period.filter(|p| *p > 0.0) {
+                    qc += ((0.5 * (a[c] + b[c]) - qc) / p).round() * p;
+                }
+                if (a[c] > qc) != (b[c] > qc) {
+                    let t = (qc - a[c]) / (b[c] - a[c]);
+                    if a[r] + t * (b[r] - a[r]) > uv[r] {
+                        odd = !odd;
+                    }
+                }
+            }
+        }
+        odd
+    }
+
+    /// Whether `uv` lies in the trimmed domain by every test that applies (for the face's
+    /// own samples: a point near a boundary that only one test puts inside is left out).
+    pub(super) fn inside_strictly(&self, face: &TrimmedFace, uv: DVec2) -> bool {
+        self.inside_by_side(face, uv) && (self.wraps || self.inside_by_parity(uv))
+    }
+
+    /// The parameter box of the loops; where a loop runs around the surface, extended along
+    /// the other direction to the end of a sphere's or B-spline's parameter range (the face
+    /// reaches a pole or the end of the surface there).
+    pub(super) fn parameter_box(&self, face: &TrimmedFace) -> Option<(DVec2, DVec2)> {
+        let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
+        for (_, uv, _) in self.loops.iter().flatten() {
+            lo = lo.min(*uv);
+            hi = hi.max(*uv);
+        }
+        if !(lo.is_finite() && hi.is_finite()) {
+            return None;
+        }
+        if self.wraps && matches!(surface_kind(&face.surface), "sphere" | "b-spline" | "nurbs") {
+            let (ru, rv) = crate::model::trimmed::parameter_bounds(&face.surface);
+            for (axis, range, period) in [(0, ru, self.periods.0), (1, rv, self.periods.1)] {
+                if let (Some((a, b)), None) = (range, period) {
+                    lo[axis] = lo[axis].min(a);
+                    hi[axis] = hi[axis].max(b);
+                }
+            }
+        }
+        Some((lo, hi))
+    }
+
+    /// Smallest 3D distance from `p` to the boundary polylines.
+    pub(super) fn distance_3d(&self, p: DVec3) -> f64 {
+        let mut best = f64::INFINITY;
+        for lp in &self.loops {
+            for w in lp.windows(2).filter(|w| !w[0].2) {
+                best = best.min(dist_to_segment(p, w[0].0, w[1].0));
+            }
+        }
+        best
+    }
+
+    /// Whether `uv` lies on the face's side of the nearest boundary segment.
+    pub(super) fn inside_by_side(&self, face: &TrimmedFace, uv: DVec2) -> bool {
+        let scale = self.metric;
+        // Nearest segment: (distance², loop, segment, parameter along it, uv shifted).
+        let mut best: Option<(f64, usize, usize, f64, DVec2)> = None;
+        for (li, lp) in self.loops.iter().enumerate() {
+            for (si, w) in lp.windows(2).enumerate() {
+                if w[0].2 {
+                    continue;
+                }
+                let (a, b) = (w[0].1, w[1].1);
+                let q = unwrap_near(uv, 0.5 * (a + b), self.periods);
+                let (a2, b2, q2) = (a * scale, b * scale, q * scale);
+                let ab = b2 - a2;
+                let t = ((q2 - a2).dot(ab) / ab.length_squared().max(1e-300)).clamp(0.0, 1.0);
+                let d2 = (a2 + ab * t).distance_squared(q2);
+                if best.is_none_or(|b| d2 < b.0) {
+                    best = Some((d2, li, si, t, q));
+                }
+            }
+        }
+        let Some((_, li, si, t, q)) = best else {
+            return true;
+        };
+        let lp = &self.loops[li];
+        let seg = |k: usize| {
+            let k = k % (lp.len() - 1);
+            (lp[k].1 * scale, lp[k + 1].1 * scale, lp[k].2)
+        };
+        let cross = |d: DVec2, r: DVec2| d.x * r.y - d.y * r.x;
+        let (a, b, _) = seg(si);
+        let q = q * scale;
+        let left = if t > 0.0 && t < 1.0 {
+            cross(b - a, q - a) > 0.0
+        } else {
+            // At a vertex: the two segments meeting there decide.
+            let (k_in, k_out) = if t <= 0.0 {
+                (si + lp.len() - 2, si)
+            } else {
+                (si, si + 1)
+            };
+            // Directions do not depend on which period a segment was unwrapped to; `q` was
+            // shifted next to segment `si`, whose end point `v` is.
+            let v = if t <= 0.0 { a } else { b };
+            let (a_in, b_in, seam_in) = seg(k_in);
+            let (a_out, b_out, seam_out) = seg(k_out);
+            let (d_in, d_out) = (b_in - a_in, b_out - a_out);
+            let l1 = cross(d_in, q - v) > 0.0;
+            let l2 = cross(d_out, q - v) > 0.0;
+            if seam_in {
+                // The boundary goes on across the seam, one period away: straight on.
+                l2
+            } else if seam_out {
+                l1
+            } else if cross(d_in, d_out) >= 0.0 {
+                l1 && l2
+            } else {
+                l1 || l2
+            }
+        };
+        left == face.domain_left
+    }
+}
+
+/// `uv` shifted by whole periods to lie nearest `near`.
+pub(super) fn unwrap_near(
+    mut uv: DVec2,
+    near: DVec2,
+    periods: (Option<f64>, Option<f64>),
+) -> DVec2 {
+    if let Some(p) = periods.0.filter(|p| *p > 0.0) {
+        uv.x += ((near.x - uv.x) / p).round() * p;
+    }
+    if let Some(p) = periods.1.filter(|p| *p > 0.0) {
+        uv.y += ((near.y - uv.y) / p).round() * p;
+    }
+    uv
+}

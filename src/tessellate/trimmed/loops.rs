@@ -1,0 +1,358 @@
+//! Trim loops in parameter space: edge polylines within ε/2, unwrapped across seams,
+//! loops around periodic surfaces aligned, joined or closed, poles split along the pole line,
+//! borders refined until the surface at every segment's parameter midpoint is within ε/2.
+
+use super::*;
+
+/// Curve parameters of an edge's polyline (from `t0` to `t1`), with chord deviation ≤ `tol`
+/// at 3 samples per segment; returns also the largest deviation sampled.
+pub(super) fn polyline_params(e: &crate::model::trimmed::TrimEdge, tol: f64) -> (Vec<f64>, f64) {
+    let n0 = if e.is_closed() { 8 } else { 2 };
+    let mut out = vec![e.t0];
+    let mut worst = 0.0f64;
+    // Stack of segments to examine, in reverse order so they pop in order.
+    let mut stack: Vec<(f64, f64, usize)> = (0..n0)
+        .rev()
+        .map(|i| {
+            let a = e.t0 + (e.t1 - e.t0) * i as f64 / n0 as f64;
+            let b = e.t0 + (e.t1 - e.t0) * (i + 1) as f64 / n0 as f64;
+            (a, b, 0)
+        })
+        .collect();
+    while let Some((a, b, depth)) = stack.pop() {
+        let pa = e.point(a);
+        let pb = e.point(b);
+        let dev = [0.25, 0.5, 0.75]
+            .iter()
+            .map(|f| {
+                let t = a + (b - a) * f;
+                dist_to_segment(e.point(t), pa, pb)
+            })
+            .fold(0.0, f64::max);
+        if dev > tol && depth < 24 && out.len() + stack.len() < MAX_EDGE_SEGMENTS {
+            let m = 0.5 * (a + b);
+            stack.push((m, b, depth + 1));
+            stack.push((a, m, depth + 1));
+        } else {
+            worst = worst.max(dev);
+            out.push(b);
+        }
+    }
+    (out, worst)
+}
+
+pub(super) fn dist_to_segment(p: DVec3, a: DVec3, b: DVec3) -> f64 {
+    let ab = b - a;
+    let l2 = ab.length_squared();
+    if l2 == 0.0 {
+        return p.distance(a);
+    }
+    let t = ((p - a).dot(ab) / l2).clamp(0.0, 1.0);
+    p.distance(a + ab * t)
+}
+
+/// `uv` shifted by whole periods to be nearest to `prev`.
+pub(super) fn unwrap_near(mut uv: DVec2, prev: DVec2, pu: Option<f64>, pv: Option<f64>) -> DVec2 {
+    if let Some(p) = pu.filter(|p| *p > 0.0) {
+        uv.x -= ((uv.x - prev.x) / p).round() * p;
+    }
+    if let Some(p) = pv.filter(|p| *p > 0.0) {
+        uv.y -= ((uv.y - prev.y) / p).round() * p;
+    }
+    uv
+}
+
+/// How many periods a closed loop winds around, per direction.
+pub(super) fn winding(lp: &[BPoint], pu: Option<f64>, pv: Option<f64>) -> (i64, i64) {
+    let (Some(f), Some(l)) = (lp.first(), lp.last()) else {
+        return (0, 0);
+    };
+    let d = l.uv - f.uv;
+    let w = |d: f64, p: Option<f64>| match p {
+        Some(p) if p > 0.0 => (d / p).round() as i64,
+        _ => 0,
+    };
+    (w(d.x, pu), w(d.y, pv))
+}
+
+/// Shifts each loop by whole periods so that it lies next to the widest loop (the outer one).
+/// Loops are unwrapped one by one from their own first point, so on a periodic surface a hole
+/// can land a period away from the outer loop's window (an outer loop over u ∈ −2π..0 and a
+/// slot at u ≈ π): the hole would then lie outside the domain and be filled.
+pub(super) fn align_loops(face: &TrimmedFace, loops: &mut [Vec<BPoint>]) {
+    let (pu, pv) = face.periods();
+    if pu.is_none() && pv.is_none() {
+        return;
+    }
+    let boxes: Vec<(DVec2, DVec2)> = loops
+        .iter()
+        .map(|lp| uv_box(std::slice::from_ref(lp)))
+        .collect();
+    let Some(outer) = boxes
+        .iter()
+        .max_by(|a, b| (a.1 - a.0).length().total_cmp(&(b.1 - b.0).length()))
+        .map(|(lo, hi)| (*lo + *hi) * 0.5)
+    else {
+        return;
+    };
+    for (lp, (lo, hi)) in loops.iter_mut().zip(boxes) {
+        let c = (lo + hi) * 0.5;
+        let shift = |p: Option<f64>, d: f64| match p {
+            Some(p) if p > 0.0 => (d / p).round() * p,
+            _ => 0.0,
+        };
+        let delta = DVec2::new(shift(pu, outer.x - c.x), shift(pv, outer.y - c.y));
+        if delta != DVec2::ZERO {
+            for b in lp.iter_mut() {
+                b.uv += delta;
+            }
+        }
+    }
+}
+
+/// Joins or closes loops that run around a periodic surface, so that every loop is a closed
+/// polygon in parameter space.
+pub(super) fn close_wrapping_loops(
+    face: &TrimmedFace,
+    loops: &mut Vec<Vec<BPoint>>,
+) -> Result<(), TrimError> {
+    let s = face;
+    let (pu, pv) = s.periods();
+    let wrapping: Vec<usize> = (0..loops.len())
+        .filter(|&i| winding(&loops[i], pu, pv) != (0, 0))
+        .collect();
+    match wrapping.len() {
+        0 => Ok(()),
+        1 => {
+            let i = wrapping[0];
+            let (wu, wv) = winding(&loops[i], pu, pv);
+            let (ru, rv) = closing_bounds(&face.surface);
+            let lp = &mut loops[i];
+            let Some(first) = lp.first().copied() else {
+                return Ok(());
+            };
+            // The loop runs from `first` to `first + w·P`; close it on the side of the domain.
+            let end =
+                first.uv + DVec2::new(wu as f64 * pu.unwrap_or(0.0), wv as f64 * pv.unwrap_or(0.0));
+            // A cone's loop is closed at its apex (truck reports a nominal range for cones);
+            // otherwise at the end of the range on the side of the domain.
+            let apex = |along_u: bool| {
+                singular_range(s, first.uv, along_u).map(|(a, b)| {
+                    let t0 = if along_u { first.uv.x } else { first.uv.y };
+                    if (a - t0).abs() > (b - t0).abs() {
+                        a
+                    } else {
+                        b
+                    }
+                })
+            };
+            let (a, b) = if wu != 0 {
+                let v = match rv {
+                    // Running +u, the left side is +v.
+                    Some((_, vmax)) if (wu > 0) == face.domain_left => vmax,
+                    Some((vmin, _)) => vmin,
+                    None => apex(false).ok_or(TrimError::UnboundedWrap)?,
+                };
+                (DVec2::new(end.x, v), DVec2::new(first.uv.x, v))
+            } else {
+                let u = match ru {
+                    // Running +v, the left side is −u.
+                    Some((umin, _)) if (wv > 0) == face.domain_left => umin,
+                    Some((_, umax)) => umax,
+                    None => apex(true).ok_or(TrimError::UnboundedWrap)?,
+                };
+                (DVec2::new(u, end.y), DVec2::new(u, first.uv.y))
+            };
+            let mut add = |uv: DVec2| {
+                lp.push(BPoint {
+                    p: s.point(uv),
+                    uv,
+                    src: None,
+                })
+            };
+            add(end);
+            add(a);
+            add(b);
+            Ok(())
+        }
+        2 => {
+            let (i, j) = (wrapping[0], wrapping[1]);
+            let wi = winding(&loops[i], pu, pv);
+            let period = DVec2::new(pu.unwrap_or(0.0), pv.unwrap_or(0.0));
+            let shift_i = DVec2::new(wi.0 as f64, wi.1 as f64) * period;
+            let b = loops.remove(j.max(i));
+            let a = loops.remove(j.min(i));
+            let (a, b) = if j > i { (a, b) } else { (b, a) };
+            let (Some(a0), Some(b0)) = (a.first().copied(), b.first().copied()) else {
+                return Ok(());
+            };
+            // Shift B so that its start is nearest to A's end (A's start + one turn).
+            let a_end = a0.uv + shift_i;
+            let dir = shift_i.normalize_or_zero();
+            let along = (a_end - b0.uv).dot(dir) / period.dot(dir.abs()).max(1e-300);
+            let k = along.round();
+            let shift_b = dir * period.dot(dir.abs()) * k;
+            let mut joined = a.clone();
+            joined.push(BPoint {
+                p: a0.p,
+                uv: a_end,
+                src: None,
+            });
+            for bp in &b {
+                joined.push(BPoint {
+                    uv: bp.uv + shift_b,
+                    ..*bp
+                });
+            }
+            joined.push(BPoint {
+                p: b0.p,
+                uv: b0.uv + shift_b - shift_i,
+                src: None,
+            });
+            loops.push(joined);
+            Ok(())
+        }
+        n => Err(TrimError::WrapCount(n)),
+    }
+}
+
+/// The parameter range a loop running around the surface is closed along: none for a cone
+/// (truck reports a nominal `0..1`; the loop is closed at the apex), else the surface's range
+/// (a sphere's poles, a B-spline's knot range).
+pub(super) fn closing_bounds(s: &TruckSurface) -> (Interval, Interval) {
+    use truck_stepio::r#in::alias::ElementarySurface;
+    match s {
+        TruckSurface::ElementarySurface(e)
+            if matches!(**e, ElementarySurface::ConicalSurface(_)) =>
+        {
+            (None, None)
+        }
+        _ => parameter_bounds(s),
+    }
+}
+
+/// Where a surface with an unbounded parameter direction collapses to a point (a cone's
+/// apex): searched along the other direction from `uv`. Returns the range between the apex and
+/// the far side, or `None`.
+pub(super) fn singular_range(s: &impl SurfaceEval, uv: DVec2, along_u: bool) -> Option<(f64, f64)> {
+    // Speed in the periodic direction is linear in the other parameter on a cone: extrapolate.
+    let at = |t: f64| {
+        let q = if along_u {
+            DVec2::new(t, uv.y)
+        } else {
+            DVec2::new(uv.x, t)
+        };
+        let (du, dv) = s.derivs(q);
+        if along_u { dv.length() } else { du.length() }
+    };
+    let t0 = if along_u { uv.x } else { uv.y };
+    let (a, b) = (at(t0), at(t0 + 1.0));
+    let slope = b - a;
+    if slope.abs() < 1e-300 {
+        return None;
+    }
+    let apex = t0 - a / slope;
+    apex.is_finite().then_some((apex.min(t0), apex.max(t0)))
+}
+
+/// Splits the segments of `lp` that run along a pole line (both ends the same 3D point, the
+/// parameters apart: see `model::poles`) into steps of at most `step` (the interior grid's
+/// steps in u and v), so that the triangles at the pole form a fan around it instead of
+/// slivers spanning the whole opening angle (no chord test ever splits such a segment).
+pub(super) fn split_poles(face: &TrimmedFace, lp: &mut Vec<BPoint>, step: DVec2) {
+    let n = lp.len();
+    if n < 2 {
+        return;
+    }
+    let tiny = 1e-9 * face.bounds.radius.max(1e-300);
+    let mut out: Vec<BPoint> = Vec::with_capacity(n);
+    for k in 0..n {
+        let (a, b) = (lp[k], lp[(k + 1) % n]);
+        out.push(a);
+        let d = b.uv - a.uv;
+        if a.p.distance(b.p) > tiny || d.length() == 0.0 {
+            continue;
+        }
+        // Along the pole: the surface at the middle is the pole point too.
+        let mid = face.point(0.5 * (a.uv + b.uv));
+        if mid.distance(a.p) > tiny.max(1e-7 * face.bounds.radius) {
+            continue;
+        }
+        let pieces = (d.x.abs() / step.x.max(1e-300))
+            .max(d.y.abs() / step.y.max(1e-300))
+            .ceil()
+            .clamp(1.0, 4096.0) as usize;
+        for s in 1..pieces {
+            out.push(BPoint {
+                p: a.p,
+                uv: a.uv + d * (s as f64 / pieces as f64),
+                src: None,
+            });
+        }
+    }
+    *lp = out;
+}
+
+/// Splits border segments until the surface at the parameter midpoint is within `tol` of the
+/// 3D chord midpoint (so the triangles along the border hold the tolerance too). With
+/// `only_closing`, segments between two edge points are kept (shared-border mode).
+pub(super) fn refine_border(
+    face: &TrimmedFace,
+    lp: &mut Vec<BPoint>,
+    tol: f64,
+    only_closing: bool,
+) {
+    let s = face;
+    let mut k = 0;
+    let mut budget = 8 * lp.len() + 256;
+    while k < lp.len() && budget > 0 {
+        let a = lp[k];
+        let b = lp[(k + 1) % lp.len()];
+        if only_closing && a.src.is_some() && b.src.is_some() {
+            k += 1;
+            continue;
+        }
+        let mid_uv = 0.5 * (a.uv + b.uv);
+        let chord = 0.5 * (a.p + b.p);
+        let on_surface = s.point(mid_uv);
+        // A border point off the surface (a model whose edge curves miss their surface) keeps
+        // its gap however finely the segment is split: allow the gaps of both ends.
+        let gap = 0.5 * (s.point(a.uv).distance(a.p) + s.point(b.uv).distance(b.p));
+        if on_surface.distance(chord) <= tol + gap || a.uv.distance(b.uv) < 1e-12 {
+            k += 1;
+            continue;
+        }
+        budget -= 1;
+        // Split on the curve when both ends come from the same edge, else on the surface.
+        let on_curve = match (a.src, b.src) {
+            (Some((la, ea, ta)), Some((lb, eb, tb))) if (la, ea) == (lb, eb) && ta != tb => face
+                .loops
+                .get(la as usize)
+                .and_then(|l| l.get(ea as usize))
+                .map(|le| (le, la, ea, 0.5 * (ta + tb))),
+            _ => None,
+        };
+        let m = match on_curve {
+            Some((le, la, ea, t)) => {
+                let p = le.edge.point(t);
+                let (pu, pv) = s.periods();
+                let uv = s
+                    .project(p, Some(mid_uv))
+                    .map(|uv| unwrap_near(uv, mid_uv, pu, pv))
+                    .filter(|uv| uv.distance(mid_uv) < a.uv.distance(b.uv))
+                    .unwrap_or(mid_uv);
+                BPoint {
+                    p,
+                    uv,
+                    src: Some((la, ea, t)),
+                }
+            }
+            None => BPoint {
+                p: on_surface,
+                uv: mid_uv,
+                src: None,
+            },
+        };
+        lp.insert(k + 1, m);
+    }
+}
