@@ -27,13 +27,7 @@ pub fn csv_row(r: &FrameRecord) -> String {
 
 /// Header ([`CSV_HEADER`]) and one line per record, each ending in a newline.
 pub fn frames_csv(records: &[FrameRecord]) -> String {
-    let mut csv = String::from(CSV_HEADER);
-    csv.push('\n');
-    for r in records {
-        csv.push_str(&csv_row(r));
-        csv.push('\n');
-    }
-    csv
+    super::table(CSV_HEADER, records, csv_row)
 }
 
 /// How a frame-rate target was met: mean frame time over all frames, and over the second half

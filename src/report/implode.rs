@@ -34,13 +34,7 @@ pub fn csv_row(r: &AnimRecord) -> String {
 
 /// The whole table: header and one line per record, each ending in a newline.
 pub fn frames_csv(records: &[AnimRecord]) -> String {
-    let mut csv = String::from(CSV_HEADER);
-    csv.push('\n');
-    for r in records {
-        csv.push_str(&csv_row(r));
-        csv.push('\n');
-    }
-    csv
+    super::table(CSV_HEADER, records, csv_row)
 }
 
 /// Writes [`frames_csv`] to `path` atomically.

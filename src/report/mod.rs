@@ -6,3 +6,14 @@
 
 pub mod flythrough;
 pub mod implode;
+
+/// A CSV table: `header`, then `row` of every record, each line ending in a newline.
+fn table<T>(header: &str, records: &[T], row: impl Fn(&T) -> String) -> String {
+    let mut csv = String::from(header);
+    csv.push('\n');
+    for r in records {
+        csv.push_str(&row(r));
+        csv.push('\n');
+    }
+    csv
+}
