@@ -97,19 +97,20 @@ pub fn step(
     let drawn_scene = moved.as_ref().unwrap_or(scene);
     let stats = state.lod.update(drawn_scene, view);
     let generation = (offsets.is_none() && !opts.heat_map).then(|| state.lod.generation());
-    if generation.is_none() || state.uploaded.as_ref().is_none_or(|u| u.0 != generation) {
-        let t0 = Instant::now();
-        let gpu = if offsets.is_none() && !opts.heat_map {
-            renderer.upload(state.lod.meshes())
-        } else {
-            renderer.upload(&drawn_meshes(&state.lod, offsets, opts.heat_map))
-        };
-        state.upload_ms = t0.elapsed().as_secs_f64() * 1e3;
-        state.uploaded = Some((generation, gpu));
-    }
-    let Some((_, gpu)) = state.uploaded.as_ref() else {
-        unreachable!("uploaded just above")
+    let gpu = match &mut state.uploaded {
+        Some((made_for, gpu)) if generation.is_some() && *made_for == generation => gpu,
+        slot => {
+            let t0 = Instant::now();
+            let gpu = if offsets.is_none() && !opts.heat_map {
+                renderer.upload(state.lod.meshes())
+            } else {
+                renderer.upload(&drawn_meshes(&state.lod, offsets, opts.heat_map))
+            };
+            state.upload_ms = t0.elapsed().as_secs_f64() * 1e3;
+            &mut slot.insert((generation, gpu)).1
+        }
     };
+    let gpu = &*gpu;
     let draw = RenderOptions {
         ids: true,
         shading: if opts.heat_map {
