@@ -102,19 +102,24 @@ impl TrimmedFace {
         Some(other)
     }
 
-    /// Whether the surface is symmetric across the pole line (every parameter and its fold
-    /// one point), tested off the line: on it every parameter is the pole anyway.
-    fn folds_across(&self, pole: Pole) -> bool {
+    /// The length of each parameter direction: its period, else its finite range, else 1.
+    fn parameter_spans(&self) -> DVec2 {
         let (pu, pv) = self.periods();
         let (ru, rv) = parameter_bounds(&self.surface);
-        let fixed = 1 - pole.free;
         let span = |period: Option<f64>, range: Interval| {
             period
                 .or(range.map(|(a, b)| b - a))
                 .filter(|l| l.is_finite() && *l > 0.0)
                 .unwrap_or(1.0)
         };
-        let spans = DVec2::new(span(pu, ru), span(pv, rv));
+        DVec2::new(span(pu, ru), span(pv, rv))
+    }
+
+    /// Whether the surface is symmetric across the pole line (every parameter and its fold
+    /// one point), tested off the line: on it every parameter is the pole anyway.
+    fn folds_across(&self, pole: Pole) -> bool {
+        let fixed = 1 - pole.free;
+        let spans = self.parameter_spans();
         let off = 0.1 * spans[fixed];
         let mut checked = false;
         for k in 0..3 {
@@ -158,15 +163,8 @@ impl TrimmedFace {
     pub(super) fn around_pole(&self, uv: DVec2, pole: Pole) -> impl Iterator<Item = DVec2> {
         const STARTS: usize = 16;
         let (free, fixed) = (pole.free, 1 - pole.free);
-        let (pu, pv) = self.periods();
         let (ru, rv) = parameter_bounds(&self.surface);
-        let span = |period: Option<f64>, range: Interval| {
-            period
-                .or(range.map(|(a, b)| b - a))
-                .filter(|l| l.is_finite() && *l > 0.0)
-                .unwrap_or(1.0)
-        };
-        let spans = DVec2::new(span(pu, ru), span(pv, rv));
+        let spans = self.parameter_spans();
         let start = if free == 0 { ru } else { rv }.map_or(0.0, |r| r.0);
         let step = 1e-3 * spans[fixed];
         (0..2 * STARTS).map(move |k| {
