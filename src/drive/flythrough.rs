@@ -7,7 +7,7 @@ use glam::DVec3;
 
 use crate::check::crack::CheckError;
 use crate::frame::{FrameState, StepOptions, step};
-use crate::lod::{LodOptions, PixelErrorController};
+use crate::lod::{InstancingStats, LodOptions, PixelErrorController};
 use crate::model::Scene;
 use crate::render::{RenderOptions, Renderer};
 use crate::view::View;
@@ -104,6 +104,8 @@ pub struct FlythroughSummary {
     pub p99_tessellation_ms: f64,
     pub max_crack_pixels: Option<usize>,
     pub total_crack_pixels: Option<usize>,
+    /// Tessellations shared by the placements of a part over the whole run.
+    pub instancing: InstancingStats,
 }
 
 /// Runs the fly-through; `on_frame` sees every record (progress).
@@ -158,6 +160,7 @@ pub fn run(
     }
     let mut summary = summarize(&records, initial_ms, jump_frames(n).1);
     summary.initial_upload_ms = initial_upload_ms;
+    summary.instancing = state.lod.instancing();
     Ok((records, summary))
 }
 
@@ -197,6 +200,7 @@ pub fn summarize(records: &[FrameRecord], initial_ms: f64, jump_frame: usize) ->
         p99_tessellation_ms: percentile(&mut tess, 0.99),
         max_crack_pixels: cracks.iter().copied().max(),
         total_crack_pixels: (!cracks.is_empty()).then(|| cracks.iter().sum()),
+        instancing: InstancingStats::default(),
     }
 }
 

@@ -25,6 +25,9 @@
 //! **Frame-rate target** (Pajon, after Funkhouser and Séquin's benefit/cost): see
 //! [`PixelErrorController`].
 
+pub mod bvh;
+mod shared;
+
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -32,7 +35,7 @@ use rayon::prelude::*;
 
 use crate::model::Scene;
 use crate::mt::CutState;
-use crate::tessellate::{PatchMesh, Tessellators};
+use crate::tessellate::PatchMesh;
 use crate::view::View;
 
 /// Ratio between consecutive tessellation levels.
@@ -98,6 +101,8 @@ pub struct LodOptions {
     pub coarsen_factor: f64,
     /// Tessellations kept per patch (current one included).
     pub cache_levels: usize,
+    /// Placements of one surface share its tessellation per level (instanced parts).
+    pub instancing: bool,
 }
 
 impl Default for LodOptions {
@@ -107,6 +112,7 @@ impl Default for LodOptions {
             budget: Duration::from_millis(40),
             coarsen_factor: 2.0,
             cache_levels: 3,
+            instancing: true,
         }
     }
 }
@@ -158,6 +164,9 @@ pub struct UpdateStats {
     pub retessellated: usize,
     /// Patches switched to a cached level (no tessellation).
     pub from_cache: usize,
+    /// Of the re-tessellated patches, those given a moved copy of a tessellation their
+    /// surface's other placements share (instanced parts: no tessellation of their own).
+    pub copied: usize,
     /// Queued patches left for later frames.
     pub queue_left: usize,
     /// Wall time spent re-tessellating.
@@ -176,6 +185,28 @@ pub struct FrameLoop {
     seconds_per_patch: f64,
     /// Changes whenever the set of meshes to draw changes (re-upload only then).
     generation: u64,
+    /// Hierarchy over the patches' bounds, and the scene it was built for (address and patch
+    /// count: an animation passes a moved scene each frame, which gets its own).
+    bvh: bvh::Bvh,
+    bvh_for: (usize, usize),
+    /// The patches inside the frustum, ascending (what [`FrameLoop::meshes`] draws).
+    seen: Vec<u32>,
+    /// Scratch for the next frame's `seen`.
+    seen_next: Vec<u32>,
+    /// Tessellations shared by the placements of one surface (instanced parts).
+    shared: shared::SharedTessellations,
+}
+
+/// How much instanced parts saved ([`FrameLoop::instancing`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct InstancingStats {
+    /// Patches whose surface at least one other patch shares (placed parts).
+    pub shared_patches: usize,
+    /// Tessellations made for shared surfaces since the loop started.
+    pub made: u64,
+    /// Patches that got a moved copy instead of a tessellation of their own: the
+    /// tessellations saved.
+    pub saved: u64,
 }
 
 impl FrameLoop {
@@ -183,25 +214,37 @@ impl FrameLoop {
     /// and marks every patch visible.
     pub fn new(scene: &Scene, view: &View, options: LodOptions) -> FrameLoop {
         let levels = Levels::for_diagonal(scene.bbox_diagonal());
-        let patches = scene
+        let frustum = view.frustum();
+        let mut shared = shared::SharedTessellations::new(scene, options.instancing);
+        let jobs: Vec<(usize, i32)> = scene
             .patches
             .par_iter()
-            .map_init(Tessellators::new, |t, patch| {
+            .enumerate()
+            .map(|(i, patch)| {
                 let wanted = view.eps_obj(&patch.bounds, options.pixel_error);
-                let level = levels.level_for(wanted);
-                let mut mesh = PatchMesh::default();
-                let mut cut = None;
-                t.patch_from(patch, levels.eps(level), &mut cut, &mut mesh);
-                PatchLod {
-                    level,
-                    mesh: Arc::new(mesh),
-                    cache: Vec::new(),
-                    wanted,
-                    in_frustum: view.sees_sphere(&patch.bounds),
-                    visible: true,
-                    cut,
-                }
+                (i, levels.level_for(wanted))
             })
+            .collect();
+        let mut cuts: Vec<Option<CutState>> = jobs.iter().map(|_| None).collect();
+        let meshes = shared.tessellate(scene, &levels, &jobs, &mut cuts);
+        shared.end_frame();
+        let patches: Vec<PatchLod> = scene
+            .patches
+            .iter()
+            .zip(jobs)
+            .zip(meshes.into_iter().zip(cuts))
+            .map(|((patch, (_, level)), (mesh, cut))| PatchLod {
+                level,
+                mesh: Arc::new(mesh),
+                cache: Vec::new(),
+                wanted: view.eps_obj(&patch.bounds, options.pixel_error),
+                in_frustum: frustum.sees(&patch.bounds),
+                visible: true,
+                cut,
+            })
+            .collect();
+        let seen = (0..patches.len() as u32)
+            .filter(|&i| patches[i as usize].in_frustum)
             .collect();
         FrameLoop {
             options,
@@ -209,6 +252,20 @@ impl FrameLoop {
             patches,
             seconds_per_patch: 0.0,
             generation: 0,
+            bvh: bvh_of(scene),
+            bvh_for: scene_key(scene),
+            seen,
+            seen_next: Vec::new(),
+            shared,
+        }
+    }
+
+    /// What sharing tessellations between the placements of a part saved so far.
+    pub fn instancing(&self) -> InstancingStats {
+        InstancingStats {
+            shared_patches: self.shared.shared_patches(),
+            made: self.shared.made,
+            saved: self.shared.saved,
         }
     }
 
@@ -227,10 +284,7 @@ impl FrameLoop {
 
     /// The meshes to draw: patches inside the frustum at their current tessellation.
     pub fn meshes(&self) -> impl Iterator<Item = &PatchMesh> {
-        self.patches
-            .iter()
-            .filter(|p| p.in_frustum)
-            .map(|p| p.mesh.as_ref())
+        self.meshes_with_index().map(|(_, m)| m)
     }
 
     /// One frame: culls, queues and re-tessellates within the budget (see module doc).
@@ -239,15 +293,26 @@ impl FrameLoop {
         let opts = self.options;
         let mut stats = UpdateStats::default();
         let mut queue: Vec<(f64, usize)> = Vec::new();
-        let mut frustum_changed = false;
-        for (i, (p, patch)) in self.patches.iter_mut().zip(&scene.patches).enumerate() {
-            let in_frustum = view.sees_sphere(&patch.bounds);
-            frustum_changed |= in_frustum != p.in_frustum;
-            p.in_frustum = in_frustum;
+        // Culling through the hierarchy: only the patches inside the frustum are visited.
+        if scene_key(scene) != self.bvh_for {
+            self.bvh = bvh_of(scene);
+            self.bvh_for = scene_key(scene);
+        }
+        let frustum = view.frustum();
+        let mut seen = std::mem::take(&mut self.seen_next);
+        seen.clear();
+        self.bvh
+            .visit_seen(|i| &scene.patches[i].bounds, &frustum, &mut seen);
+        seen.sort_unstable();
+        let frustum_changed = seen != self.seen;
+        for &i in &self.seen {
+            self.patches[i as usize].in_frustum = false;
+        }
+        for &i in &seen {
+            let (i, patch) = (i as usize, &scene.patches[i as usize]);
+            let p = &mut self.patches[i];
+            p.in_frustum = true;
             p.wanted = view.eps_obj(&patch.bounds, opts.pixel_error);
-            if !p.in_frustum {
-                continue;
-            }
             stats.in_frustum += 1;
             let current = self.levels.eps(p.level);
             // (At the finest level there is nothing better to do: not queued.)
@@ -258,6 +323,7 @@ impl FrameLoop {
                 queue.push((priority(current, p.wanted), i));
             }
         }
+        self.seen_next = std::mem::replace(&mut self.seen, seen);
         stats.queued = queue.len();
         queue.sort_by(|a, b| b.0.total_cmp(&a.0));
         // Cached levels first: free.
@@ -304,15 +370,9 @@ impl FrameLoop {
                 .iter()
                 .map(|&(i, _)| self.patches[i].cut.take())
                 .collect();
-            let results: Vec<PatchMesh> = jobs
-                .par_iter()
-                .zip(cuts.par_iter_mut())
-                .map_init(Tessellators::new, |t, (&(i, level), cut)| {
-                    let mut mesh = PatchMesh::default();
-                    t.patch_from(&scene.patches[i], levels.eps(level), cut, &mut mesh);
-                    mesh
-                })
-                .collect();
+            let saved = self.shared.saved;
+            let results = self.shared.tessellate(scene, &levels, jobs, &mut cuts);
+            stats.copied += (self.shared.saved - saved) as usize;
             for (&(i, _), cut) in jobs.iter().zip(cuts) {
                 self.patches[i].cut = cut;
             }
@@ -331,6 +391,7 @@ impl FrameLoop {
             next = end;
         }
         stats.queue_left = todo.len() - next;
+        self.shared.end_frame();
         stats.tessellation = start.elapsed();
         if stats.retessellated + stats.from_cache > 0 || frustum_changed {
             self.generation += 1;
@@ -347,22 +408,26 @@ impl FrameLoop {
             .collect()
     }
 
+    /// Patch `i`'s current tessellation (inside the frustum or not).
+    pub fn mesh(&self, i: usize) -> Option<&PatchMesh> {
+        self.patches.get(i).map(|p| p.mesh.as_ref())
+    }
+
     /// As [`FrameLoop::meshes`], with each patch's index in the scene.
     pub fn meshes_with_index(&self) -> impl Iterator<Item = (usize, &PatchMesh)> {
-        self.patches
+        self.seen
             .iter()
-            .enumerate()
-            .filter(|(_, p)| p.in_frustum)
-            .map(|(i, p)| (i, p.mesh.as_ref()))
+            .map(|&i| (i as usize, self.patches[i as usize].mesh.as_ref()))
     }
 
     /// Largest and 99th-percentile screen-space error (pixels) over the patches visible in
     /// the last frame and inside the frustum: pixel error × ε_c / ε_w.
     pub fn screen_errors(&self) -> (f64, f64) {
         let mut e: Vec<f64> = self
-            .patches
+            .seen
             .iter()
-            .filter(|p| p.in_frustum && p.visible && p.wanted > 0.0)
+            .map(|&i| &self.patches[i as usize])
+            .filter(|p| p.visible && p.wanted > 0.0)
             .map(|p| self.options.pixel_error * self.levels.eps(p.level) / p.wanted)
             .collect();
         if e.is_empty() {
@@ -372,6 +437,19 @@ impl FrameLoop {
         let p99 = e[((e.len() - 1) as f64 * 0.99).round() as usize];
         (e[e.len() - 1], p99)
     }
+}
+
+/// The culling hierarchy over a scene's patch bounds.
+fn bvh_of(scene: &Scene) -> bvh::Bvh {
+    let spheres: Vec<_> = scene.patches.iter().map(|p| p.bounds).collect();
+    bvh::Bvh::new(&spheres)
+}
+
+/// Which scene a hierarchy was built for: the address of its patches and their count (a
+/// frame loop is driven with the scene it was made for, or with a moved copy of it made for
+/// one frame, which gets a hierarchy of its own).
+fn scene_key(scene: &Scene) -> (usize, usize) {
+    (scene.patches.as_ptr() as usize, scene.patches.len())
 }
 
 /// Frame-rate target (Pajon §3, after Funkhouser and Séquin): picks the pixel error of the

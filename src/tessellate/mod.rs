@@ -99,7 +99,15 @@ impl Tessellators {
         cut: &mut Option<CutState>,
         out: &mut PatchMesh,
     ) {
-        self.dispatch(patch, eps, false, Some(cut), out)
+        self.dispatch(patch, eps, false, Some(cut), true, out)
+    }
+
+    /// As [`Tessellators::patch`] for a patch whose surface other placements share
+    /// ([`shared_surface`]): the tessellation in the surface's own coordinates (errors in
+    /// world units), which [`placed`] copies to each placement — a part placed k times is
+    /// tessellated once per level.
+    pub fn unplaced(&mut self, patch: &Patch, eps: f64, out: &mut PatchMesh) {
+        self.dispatch(patch, eps, false, None, false, out)
     }
 
     /// As [`Tessellators::patch`]; `shared_borders` keeps trim polylines to what depends on
@@ -112,7 +120,7 @@ impl Tessellators {
         shared_borders: bool,
         out: &mut PatchMesh,
     ) {
-        self.dispatch(patch, eps, shared_borders, None, out)
+        self.dispatch(patch, eps, shared_borders, None, true, out)
     }
 
     fn dispatch(
@@ -121,6 +129,7 @@ impl Tessellators {
         eps: f64,
         shared_borders: bool,
         cut: Option<&mut Option<CutState>>,
+        place_it: bool,
         out: &mut PatchMesh,
     ) {
         out.patch_id = patch.id;
@@ -141,7 +150,9 @@ impl Tessellators {
                         out.trim_error = report.trim_error * scale;
                         out.error *= scale;
                         out.eps_target = eps;
-                        place(out, patch);
+                        if place_it {
+                            place(out, patch);
+                        }
                     }
                     Ok(Err(e)) => fail(out, eps, format!("face #{}: {e}", face.id)),
                     Err(e) => {
@@ -209,6 +220,33 @@ fn fail(out: &mut PatchMesh, eps: f64, why: String) {
     out.error = 0.0;
     out.eps_target = eps;
     out.failure = Some(why);
+}
+
+/// What a patch's tessellation at a given ε depends on when other placements can share it:
+/// its surface (by address: a trimmed face is shared by every placement of its part) and how
+/// much its placement scales lengths (ε is divided by it). `None` for Bézier and mesh patches,
+/// whose tessellation is their own.
+pub fn shared_surface(patch: &Patch) -> Option<(usize, u64)> {
+    match &patch.surface {
+        PatchSurface::Trimmed(face) => Some((
+            std::sync::Arc::as_ptr(face) as usize,
+            patch.scale().to_bits(),
+        )),
+        PatchSurface::Bezier(_) | PatchSurface::Mesh(_) => None,
+    }
+}
+
+/// A copy of `unplaced` (from [`Tessellators::unplaced`] on a patch with the same
+/// [`shared_surface`]) moved to `patch`'s placement, with its id and colour: exactly what
+/// [`Tessellators::patch`] makes for `patch`.
+pub fn placed(unplaced: &PatchMesh, patch: &Patch) -> PatchMesh {
+    let mut out = unplaced.clone();
+    out.patch_id = patch.id;
+    out.color = patch.color;
+    if out.failure.is_none() {
+        place(&mut out, patch);
+    }
+    out
 }
 
 /// Moves a mesh from its patch's own coordinates into the scene.

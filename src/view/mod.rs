@@ -129,18 +129,25 @@ impl View {
     }
 
     /// Whether the sphere `s` reaches into the view frustum (side planes, near and far): what
-    /// frustum culling keeps.
+    /// frustum culling keeps. (One test; [`View::frustum`] precomputes it for many spheres.)
     pub fn sees_sphere(&self, s: &Sphere) -> bool {
-        let c = (self.view_matrix() * s.center.extend(1.0)).truncate();
-        let depth = -c.z;
-        if depth + s.radius < self.near || depth - s.radius > self.far {
-            return false;
-        }
+        self.frustum().sees(s)
+    }
+
+    /// The view's frustum, with the view matrix and side-plane slopes computed once: for
+    /// testing many spheres per frame.
+    pub fn frustum(&self) -> Frustum {
         let ty = (self.fov_y * 0.5).tan();
         let tx = ty * self.aspect();
-        // Distance outside the side plane `|a| = t · depth` (planes through the eye).
-        let within = |a: f64, t: f64| (a.abs() - t * depth) / (1.0 + t * t).sqrt() <= s.radius;
-        within(c.x, tx) && within(c.y, ty)
+        Frustum {
+            view: self.view_matrix(),
+            near: self.near,
+            far: self.far,
+            tx,
+            ty,
+            nx: (1.0 + tx * tx).sqrt(),
+            ny: (1.0 + ty * ty).sqrt(),
+        }
     }
 
     /// Projects a world point to pixel coordinates (x right, y down, centres at half-integers)
@@ -154,6 +161,35 @@ impl View {
         let x = (ndc.x * 0.5 + 0.5) * self.width as f64;
         let y = (0.5 - ndc.y * 0.5) * self.height as f64;
         Some((x, y, clip.w))
+    }
+}
+
+/// A view frustum ready for many sphere tests ([`View::frustum`]): side planes through the
+/// eye, `|x| = tx · depth` and `|y| = ty · depth` in view space, and the near and far planes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Frustum {
+    view: DMat4,
+    near: f64,
+    far: f64,
+    tx: f64,
+    ty: f64,
+    /// Plane normalisers √(1 + t²).
+    nx: f64,
+    ny: f64,
+}
+
+impl Frustum {
+    /// Whether the sphere `s` reaches into the frustum (within its radius of every plane's
+    /// inner side): conservative, what frustum culling keeps.
+    pub fn sees(&self, s: &Sphere) -> bool {
+        let c = (self.view * s.center.extend(1.0)).truncate();
+        let depth = -c.z;
+        if depth + s.radius < self.near || depth - s.radius > self.far {
+            return false;
+        }
+        // Distance outside the side plane `|a| = t · depth` (planes through the eye).
+        let within = |a: f64, t: f64, n: f64| (a.abs() - t * depth) / n <= s.radius;
+        within(c.x, self.tx, self.nx) && within(c.y, self.ty, self.ny)
     }
 }
 

@@ -7,6 +7,7 @@ use clap::Args;
 
 use patchwork::drive::flythrough::{FlythroughOptions, run as run_flythrough};
 use patchwork::io::png;
+use patchwork::lod::LodOptions;
 use patchwork::render::Renderer;
 use patchwork::report::flythrough::{TargetSummary, frames_csv, plot};
 use patchwork::strips::Join;
@@ -45,6 +46,10 @@ pub struct BenchArgs {
     /// Skip the per-frame crack measurement (it renders a reference; not timed either way).
     #[arg(long)]
     no_cracks: bool,
+    /// Tessellate every placement of a part on its own (no sharing between instances; for
+    /// comparison).
+    #[arg(long)]
+    no_instancing: bool,
     /// Mesh patches: upload every new cut's triangles instead of drawing index ranges of
     /// static per-patch buffers (for comparison).
     #[arg(long)]
@@ -89,7 +94,10 @@ pub fn run(args: &BenchArgs) -> Result<bool, CliError> {
         frames,
         size: args.size,
         fov_y,
-        lod: lod_options(pixel_error, budget),
+        lod: LodOptions {
+            instancing: !args.no_instancing,
+            ..lod_options(pixel_error, budget)
+        },
         target,
         cracks: !args.no_cracks,
     };
@@ -140,6 +148,16 @@ pub fn run(args: &BenchArgs) -> Result<bool, CliError> {
         println!(
             "frame-rate target         {t} ms: achieved mean {:.2} ms (second half {:.2} ms at pixel error {:.2} on average)",
             s.mean_ms, s.tail_mean_ms, s.tail_pixel_error
+        );
+    }
+    let inst = summary.instancing;
+    if inst.shared_patches > 0 {
+        println!(
+            "instanced parts           {} of {} patches share a surface with another placement: {} tessellations made for them, {} saved",
+            inst.shared_patches,
+            scene.patches.len(),
+            inst.made,
+            inst.saved
         );
     }
     let crack_free = summary.max_crack_pixels.is_none_or(|m| m == 0);

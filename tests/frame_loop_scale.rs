@@ -1,0 +1,121 @@
+//! The frame loop at scale (issue 19): culling through the bounding-volume hierarchy keeps
+//! exactly the patches a linear scan keeps, and instanced parts share their tessellations
+//! without changing a single vertex. CPU only: no adapter needed.
+
+mod common;
+
+use glam::DVec3;
+use patchwork::lod::{FrameLoop, LodOptions};
+use patchwork::model::Scene;
+use patchwork::tessellate::{PatchMesh, Tessellators, placed};
+use patchwork::view::View;
+
+/// Views around and inside the model: far, close to a corner (most patches culled), and
+/// looking away.
+fn views(scene: &Scene) -> Vec<View> {
+    let (c, r) = (scene.bounds.center, scene.bounds.radius);
+    let up = scene.up.vector();
+    let side = if up == DVec3::Z { DVec3::X } else { DVec3::Z };
+    let size = (320, 240);
+    let fov = 45f64.to_radians();
+    [
+        (c + (side + up * 0.4) * 3.0 * r, c),
+        (
+            c + side * 0.6 * r,
+            c + side * 0.2 * r + up.cross(side) * 0.5 * r,
+        ),
+        (c - up.cross(side) * 0.7 * r, c - up.cross(side) * 2.0 * r),
+    ]
+    .into_iter()
+    .map(|(eye, target)| View::new(eye, target, up, fov, size, &scene.bounds))
+    .collect()
+}
+
+#[test]
+fn culling_keeps_exactly_the_patches_a_linear_scan_keeps() {
+    for name in ["as1-oc-214.stp", "bunny.glb"] {
+        let scene = common::load(name);
+        let vs = views(&scene);
+        let mut lod = FrameLoop::new(&scene, &vs[0], LodOptions::default());
+        let mut some_culled = false;
+        for v in vs.iter().chain(vs.iter().rev()) {
+            lod.update(&scene, v);
+            let drawn: Vec<usize> = lod.meshes_with_index().map(|(i, _)| i).collect();
+            let linear: Vec<usize> = (0..scene.patches.len())
+                .filter(|&i| v.sees_sphere(&scene.patches[i].bounds))
+                .collect();
+            assert_eq!(drawn, linear, "{name}: eye {}", v.eye);
+            some_culled |= linear.len() < scene.patches.len() && !linear.is_empty();
+        }
+        assert!(some_culled, "{name}: the views should cull some patches");
+    }
+}
+
+/// Every patch's mesh as drawn equals, vertex for vertex, the patch tessellated on its own at
+/// the same ε; on as1 (bolts and nuts placed several times) most placed faces got a copy.
+#[test]
+fn instanced_parts_share_tessellations_without_changing_a_vertex() {
+    let scene = common::load("as1-oc-214.stp");
+    let vs = views(&scene);
+    let mut lod = FrameLoop::new(&scene, &vs[0], LodOptions::default());
+    for v in &vs {
+        lod.update(&scene, v);
+    }
+    let stats = lod.instancing();
+    assert!(
+        stats.shared_patches > scene.patches.len() / 4,
+        "as1 places its bolts and nuts several times: {stats:?} of {} patches",
+        scene.patches.len()
+    );
+    assert!(stats.saved > 0 && stats.made > 0, "{stats:?}");
+    let mut t = Tessellators::new();
+    let mut checked = 0;
+    for i in 0..scene.patches.len() {
+        let m = lod.mesh(i).expect("one mesh per patch");
+        let mut own = PatchMesh::default();
+        t.patch(&scene.patches[i], m.eps_target, &mut own);
+        assert_eq!(m.patch_id, own.patch_id);
+        assert_eq!(m.positions, own.positions, "patch {i}");
+        assert_eq!(m.normals, own.normals, "patch {i}");
+        assert_eq!(m.triangles, own.triangles, "patch {i}");
+        assert_eq!(m.borders, own.borders, "patch {i}");
+        assert_eq!(m.color, own.color, "patch {i}");
+        checked += 1;
+    }
+    assert_eq!(checked, scene.patches.len());
+}
+
+/// Mutation check of the test above: a copy placed for another placement of the same surface
+/// is not the patch's own mesh, so comparing vertices does catch a wrong placement.
+#[test]
+fn a_copy_placed_for_another_placement_differs() {
+    let scene = common::load("as1-oc-214.stp");
+    let key = patchwork::tessellate::shared_surface;
+    let (a, b) = (0..scene.patches.len())
+        .flat_map(|a| (a + 1..scene.patches.len()).map(move |b| (a, b)))
+        .find(|&(a, b)| {
+            key(&scene.patches[a]).is_some()
+                && key(&scene.patches[a]) == key(&scene.patches[b])
+                && scene.patches[a].transform != scene.patches[b].transform
+        })
+        .expect("as1 places a part twice");
+    let mut t = Tessellators::new();
+    let eps = scene.bounds.radius * 1e-3;
+    let mut unplaced = PatchMesh::default();
+    t.unplaced(&scene.patches[a], eps, &mut unplaced);
+    let (mut own_a, mut own_b) = (PatchMesh::default(), PatchMesh::default());
+    t.patch(&scene.patches[a], eps, &mut own_a);
+    t.patch(&scene.patches[b], eps, &mut own_b);
+    assert_eq!(
+        placed(&unplaced, &scene.patches[a]).positions,
+        own_a.positions
+    );
+    assert_eq!(
+        placed(&unplaced, &scene.patches[b]).positions,
+        own_b.positions
+    );
+    assert_ne!(
+        placed(&unplaced, &scene.patches[b]).positions,
+        own_a.positions
+    );
+}
