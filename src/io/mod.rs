@@ -20,6 +20,7 @@ pub mod gltf_out;
 pub mod mesh;
 pub mod png;
 pub mod step;
+pub mod stl;
 
 use std::path::{Path, PathBuf};
 
@@ -85,7 +86,7 @@ pub enum LoadError {
 
     /// No reader for this file extension (`extension` is empty when there is none).
     #[error(
-        "{}: unsupported model format {extension:?} (patchwork reads .bpt, .step, .stp, .step.gz, .stp.gz, .glb, .gltf, .obj and .ply files)",
+        "{}: unsupported model format {extension:?} (patchwork reads .bpt, .step, .stp, .step.gz, .stp.gz, .glb, .gltf, .obj, .ply and .stl files)",
         .path.display()
     )]
     UnsupportedFormat { path: PathBuf, extension: String },
@@ -204,6 +205,8 @@ pub fn read(path: &Path) -> Result<Model, LoadError> {
         Ok(Model::Step(Box::new(step::read(&bytes, path)?)))
     } else if extension.eq_ignore_ascii_case("obj") {
         Ok(Model::Mesh(mesh::read_obj(path)?))
+    } else if extension.eq_ignore_ascii_case("stl") {
+        Ok(Model::Mesh(stl::read(path)?))
     } else if extension.eq_ignore_ascii_case("ply") {
         Ok(Model::Mesh(mesh::read_ply(path)?))
     } else if extension.eq_ignore_ascii_case("glb") || extension.eq_ignore_ascii_case("gltf") {
