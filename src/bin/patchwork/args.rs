@@ -88,11 +88,11 @@ pub fn pixel_error(px: f64) -> Result<f64, CliError> {
 
 /// `--fov` in degrees → the vertical field of view in radians.
 pub fn fov_y(deg: f64) -> Result<f64, CliError> {
-    if !(deg.is_finite() && deg > 0.5 && deg < 179.0) {
+    if !(deg.is_finite() && (0.5..=179.0).contains(&deg)) {
         return Err(CliError::OutOfRange {
             flag: "--fov",
             value: deg,
-            range: "between 0.5 and 179 degrees",
+            range: "from 0.5 to 179 degrees",
         });
     }
     Ok(deg.to_radians())
@@ -267,6 +267,21 @@ impl DrawArgs {
             msaa: self.msaa,
             depth: false,
             ..RenderOptions::default()
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The bounds the message names are accepted; just past them are not.
+    #[test]
+    fn fov_accepts_the_range_it_names() {
+        assert!(fov_y(0.5).is_ok() && fov_y(179.0).is_ok() && fov_y(45.0).is_ok());
+        for bad in [0.49, 179.01, f64::NAN, f64::INFINITY, -45.0] {
+            let e = fov_y(bad).expect_err("out of range").to_string();
+            assert!(e.contains("from 0.5 to 179 degrees"), "{e}");
         }
     }
 }
