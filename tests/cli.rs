@@ -328,4 +328,18 @@ fn implode_rejects_bad_arguments() {
         assert_eq!(o.status.code(), Some(2), "{all:?}");
         assert!(stderr(&o).contains(why), "{all:?}: {}", stderr(&o));
     }
+    // An output folder named like the GIF: refused before anything is made.
+    let gif = dir.join("anim.gif");
+    let o = Command::new(env!("CARGO_BIN_EXE_patchwork"))
+        .current_dir(common::root())
+        .args(["implode", "models/teapot.bpt", "-o", s(&gif)])
+        .output()
+        .expect("runs");
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("names the output folder"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!gif.exists(), "no folder named anim.gif");
 }

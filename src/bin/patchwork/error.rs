@@ -93,4 +93,11 @@ pub enum CliError {
     /// `ffmpeg` ran and failed.
     #[error("ffmpeg failed ({status}); the PNGs are in {}", .dir.display())]
     FfmpegFailed { status: ExitStatus, dir: PathBuf },
+    /// An output folder named like a file: `implode -o anim.gif`.
+    #[error("{}: -o names the output folder (frames, the GIF and frames.csv go inside it), not a .{extension} file; try -o {}", .path.display(), .suggestion.display())]
+    OutputNotFolder {
+        path: PathBuf,
+        extension: String,
+        suggestion: PathBuf,
+    },
 }

@@ -62,6 +62,22 @@ pub struct ImplodeArgs {
     draw: DrawArgs,
 }
 
+/// The output folder, refused when it is named like one of the files written into it.
+fn output_folder(dir: &Path) -> Result<&Path, CliError> {
+    const FILES: [&str; 6] = ["gif", "png", "mp4", "csv", "jpg", "jpeg"];
+    match dir
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+    {
+        Some(e) if FILES.contains(&e.as_str()) && !dir.is_dir() => Err(CliError::OutputNotFolder {
+            path: dir.to_owned(),
+            extension: e,
+            suggestion: dir.with_extension(""),
+        }),
+        _ => Ok(dir),
+    }
+}
+
 fn create_dir(dir: &Path) -> Result<(), CliError> {
     std::fs::create_dir_all(dir).map_err(|source| CliError::CreateDir {
         path: dir.to_owned(),
@@ -76,6 +92,7 @@ pub fn run(args: &ImplodeArgs) -> Result<bool, CliError> {
     at_least("--fps", args.fps as usize, 1)?;
     let fps = args.fps;
     let budget = args.budget.validate()?;
+    output_folder(&args.output)?;
     let scene = load(&args.file)?;
     // Frame the whole flight: the view holds every frame.
     let explosion = Explosion::new(&scene, args.by, distance);
