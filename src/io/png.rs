@@ -21,6 +21,10 @@ pub enum WriteError {
     },
     #[error("{}: cannot encode PNG: {reason}", .path.display())]
     Encode { path: PathBuf, reason: String },
+    /// An image file name whose extension says another format: PNG bytes would be written
+    /// under a name that promises something else.
+    #[error("{}: patchwork writes PNG images; name the file .png, not .{extension}", .path.display())]
+    NotPng { path: PathBuf, extension: String },
 }
 
 /// The temporary name used while `path` is being written.
@@ -82,6 +86,14 @@ where
     P: image::PixelWithColorType,
     [P::Subpixel]: image::EncodableLayout,
 {
+    if let Some(e) = path.extension()
+        && !e.eq_ignore_ascii_case("png")
+    {
+        return Err(WriteError::NotPng {
+            path: path.to_owned(),
+            extension: e.to_string_lossy().into_owned(),
+        });
+    }
     let (width, height) = image.dimensions();
     if width == 0 || height == 0 {
         return Err(WriteError::EmptyImage {
@@ -213,6 +225,26 @@ mod tests {
             Err(WriteError::Io { .. })
         ));
         assert!(!path.exists());
+    }
+
+    /// `render -o x.jpg` used to write PNG bytes under a .jpg name; now nothing is written.
+    #[test]
+    fn a_name_promising_another_format_is_refused() {
+        let dir = std::env::temp_dir().join(format!("patchwork-notpng-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        let img = image::RgbaImage::new(4, 4);
+        for name in ["x.jpg", "x.JPEG", "x.gif"] {
+            let path = dir.join(name);
+            let e = write_rgba(&path, &img).expect_err(name).to_string();
+            assert!(e.contains("writes PNG images"), "{e}");
+            assert!(!path.exists());
+        }
+        for name in ["x.png", "x.PNG", "no-extension"] {
+            let path = dir.join(name);
+            write_rgba(&path, &img).expect(name);
+            assert!(path.is_file());
+        }
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]
