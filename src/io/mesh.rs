@@ -57,18 +57,88 @@ fn append(
 }
 
 /// Reads every triangle primitive of the default scene (or the first) of a glTF file.
+///
+/// Hardened against hostile files (issue 21): the whole file is read first and parsed from
+/// memory (so a GLB header cannot ask for more bytes than the file has), buffers may only be
+/// embedded, `data:` URIs or relative paths that stay inside the file's folder (no absolute
+/// paths, `..` or `file:`), images are not loaded, the node graph must be a tree (a node
+/// reached twice — a cycle — is an error), and a panic inside the gltf crates becomes an
+/// error naming the file.
 pub fn read_gltf(path: &Path) -> Result<TriMesh, LoadError> {
+    let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    match crate::isolate::isolated(|| gltf_mesh(path, &bytes)) {
+        Ok(result) => result,
+        Err(panic) => Err(LoadError::Unreadable {
+            path: path.to_path_buf(),
+            reason: format!("not a valid glTF file: the glTF reader failed ({panic})"),
+        }),
+    }
+}
+
+/// Whether a buffer URI may be followed: a `data:` URI, or a relative path (after
+/// percent-decoding) without `..`, a root, a drive or a scheme.
+fn safe_buffer_uri(uri: &str) -> Result<(), String> {
+    if uri.starts_with("data:") {
+        return Ok(());
+    }
+    let decoded = percent_decode(uri).ok_or_else(|| format!("buffer URI {uri:?} is not valid"))?;
+    let bad = decoded.contains(':')
+        || decoded.starts_with('/')
+        || decoded.contains('\\')
+        || decoded.split('/').any(|c| c == "..");
+    if bad {
+        return Err(format!(
+            "buffer URI {uri:?} points outside the file's folder (only embedded data and relative paths below it are read)"
+        ));
+    }
+    Ok(())
+}
+
+/// `%XX` escapes decoded; `None` for a broken escape or bytes that are not UTF-8.
+fn percent_decode(s: &str) -> Option<String> {
+    let b = s.as_bytes();
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        if b[i] == b'%' {
+            let hex = std::str::from_utf8(b.get(i + 1..i + 3)?).ok()?;
+            out.push(u8::from_str_radix(hex, 16).ok()?);
+            i += 3;
+        } else {
+            out.push(b[i]);
+            i += 1;
+        }
+    }
+    String::from_utf8(out).ok()
+}
+
+fn gltf_mesh(path: &Path, bytes: &[u8]) -> Result<TriMesh, LoadError> {
     let unreadable = |reason: String| LoadError::Unreadable {
         path: path.to_path_buf(),
         reason,
     };
-    let (doc, buffers, _) = gltf::import(path).map_err(|e| match e {
-        gltf::Error::Io(source) => LoadError::Io {
-            path: path.to_path_buf(),
-            source,
+    let gltf = gltf::Gltf::from_slice(bytes)
+        .map_err(|e| unreadable(format!("not a valid glTF file: {e}")))?;
+    for b in gltf.document.buffers() {
+        if let gltf::buffer::Source::Uri(uri) = b.source() {
+            safe_buffer_uri(uri).map_err(|e| unreadable(format!("buffer {}: {e}", b.index())))?;
+        }
+    }
+    let base = path.parent().unwrap_or(Path::new("."));
+    let buffers = gltf::import_buffers(&gltf.document, Some(base), gltf.blob.clone()).map_err(
+        |e| match e {
+            gltf::Error::Io(source) => LoadError::Io {
+                path: path.to_path_buf(),
+                source,
+            },
+            other => unreadable(format!("not a valid glTF file: {other}")),
         },
-        other => unreadable(format!("not a valid glTF file: {other}")),
-    })?;
+    )?;
+    let doc = &gltf.document;
+    let mut reached = vec![false; doc.nodes().count()];
     let scene = doc
         .default_scene()
         .or_else(|| doc.scenes().next())
@@ -78,6 +148,15 @@ pub fn read_gltf(path: &Path) -> Result<TriMesh, LoadError> {
         scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
     let mut skipped_modes = 0;
     while let Some((node, parent)) = stack.pop() {
+        match reached.get_mut(node.index()) {
+            Some(r) if !*r => *r = true,
+            _ => {
+                return Err(unreadable(format!(
+                    "node {} is reached twice: the node graph must be a tree (a cycle?)",
+                    node.index()
+                )));
+            }
+        }
         let local = Mat4::from_cols_array_2d(&node.transform().matrix());
         let world = parent * local;
         if let Some(m) = node.mesh() {
