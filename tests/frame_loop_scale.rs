@@ -119,3 +119,62 @@ fn a_copy_placed_for_another_placement_differs() {
         own_a.positions
     );
 }
+
+/// A 3 × 2 grid of teapots (the scene, small): every copy of a patch shares the first
+/// one's tessellation, translated, and stays within f32 rounding of its own tessellation.
+#[test]
+fn translated_bezier_copies_share_tessellations() {
+    use patchwork::io::Model;
+    use patchwork::model::{BezierPatch, UpAxis};
+    let Ok(Model::Bezier(teapot)) = patchwork::io::read(&common::root().join("models/teapot.bpt"))
+    else {
+        panic!("the teapot reads as Bézier patches");
+    };
+    let mut patches = Vec::new();
+    for (i, j) in [(0, 0), (1, 0), (2, 0), (0, 1), (1, 1), (2, 1)] {
+        let offset = DVec3::new(8.0 * i as f64, 8.0 * j as f64, 0.0);
+        for b in &teapot {
+            let (du, dv) = b.degree();
+            let ctrl = b.control_points().iter().map(|c| *c + offset).collect();
+            patches.push(BezierPatch::new(du, dv, ctrl).expect("a translated patch"));
+        }
+    }
+    let scene = Scene::from_bezier(patches, UpAxis::Z);
+    let vs = views(&scene);
+    let mut lod = FrameLoop::new(&scene, &vs[0], LodOptions::default());
+    lod.update(&scene, &vs[1]);
+    let stats = lod.instancing();
+    assert_eq!(stats.shared_patches, scene.patches.len(), "{stats:?}");
+    // Copies at the same distance want the same level: fewer tessellations than patches.
+    assert!(
+        stats.saved > 0 && stats.made < scene.patches.len() as u64,
+        "{stats:?}"
+    );
+    let mut t = Tessellators::new();
+    for (i, patch) in scene.patches.iter().enumerate() {
+        let m = lod.mesh(i).expect("a mesh");
+        let mut own = PatchMesh::default();
+        t.patch(patch, m.eps_target, &mut own);
+        assert_eq!(m.patch_id, own.patch_id);
+        // The same grid (a quad's diagonal may flip with rounding: either is within ε).
+        assert_eq!(m.resolution, own.resolution, "patch {i}");
+        assert_eq!(m.triangles.len(), own.triangles.len(), "patch {i}");
+        assert_eq!(m.borders, own.borders, "patch {i}");
+        let far = m
+            .positions
+            .iter()
+            .zip(&own.positions)
+            .map(|(a, b)| a.distance(*b))
+            .fold(0.0f32, f32::max);
+        assert!(
+            far < 1e-5,
+            "patch {i}: a copy is {far} off its own tessellation"
+        );
+        assert!(
+            m.error <= m.eps_target,
+            "patch {i}: error {} > ε {}",
+            m.error,
+            m.eps_target
+        );
+    }
+}

@@ -5,8 +5,16 @@
 //! each placement gets a moved copy ([`placed`]) — the same mesh, vertex for vertex, that
 //! tessellating the patch itself gives (tested in `tests/lod.rs`).
 //!
+//! Bézier files (`.bpt`) have no placements, but a model made of copies of one part (the
+//! teapot grid of issue 19) repeats the same control points, translated. Bézier patches whose
+//! control points agree after translation (to within [`TRANSLATION_TOLERANCE`] × the model's
+//! diagonal, checked exactly after grouping) share too: a copy is the first patch's
+//! tessellation translated, and its error grows by the largest control-point difference —
+//! a bound, since the difference of two Bézier patches is the Bézier patch of their control
+//! points' differences (convex hull property).
+//!
 //! Shared tessellations are kept while some placement asks for them: an entry unused for
-//! [`KEEP_FRAMES`] frames is dropped. Mesh and Bézier patches are never shared.
+//! [`KEEP_FRAMES`] frames is dropped. Mesh patches are never shared.
 
 use std::collections::{HashMap, HashSet};
 use std::sync::Arc;
@@ -21,14 +29,35 @@ use crate::tessellate::{PatchMesh, Tessellators, placed, shared_surface};
 /// Frames a shared tessellation is kept without being asked for.
 pub const KEEP_FRAMES: u64 = 16;
 
-/// A shared surface and its placement's scale ([`shared_surface`]).
-type SurfaceKey = (usize, u64);
+/// Bézier patches whose translated control points differ by at most this fraction of the
+/// model's diagonal share a tessellation.
+pub const TRANSLATION_TOLERANCE: f64 = 1e-9;
+
+/// What placements share: a surface placed with a scale ([`shared_surface`]), or a class of
+/// Bézier patches equal up to translation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+enum SurfaceKey {
+    Placed(usize, u64),
+    Translated(u32),
+}
+
+/// How patch `i` gets its mesh from its class's tessellation: moved by its placement, or
+/// translated from the class's first patch (`delta`, world units) with `deviation` added to
+/// its error.
+#[derive(Clone, Copy, Debug)]
+struct Share {
+    key: SurfaceKey,
+    /// The patch whose tessellation the class shares (the first of its class).
+    source: u32,
+    delta: glam::DVec3,
+    deviation: f64,
+}
 
 /// The shared tessellations of one frame loop (per-view state, like the rest of it).
 #[derive(Debug, Default)]
 pub(super) struct SharedTessellations {
-    /// Per patch: its surface, when at least one other patch shares it.
-    keys: Vec<Option<SurfaceKey>>,
+    /// Per patch: what it shares, when at least one other patch shares it.
+    keys: Vec<Option<Share>>,
     /// Unplaced tessellations by surface and level, with the frame they were last asked for.
     meshes: HashMap<(SurfaceKey, i32), (Arc<PatchMesh>, u64)>,
     frame: u64,
@@ -41,18 +70,32 @@ pub(super) struct SharedTessellations {
 impl SharedTessellations {
     /// Finds the shared surfaces of `scene` (none unless `enabled`).
     pub(super) fn new(scene: &Scene, enabled: bool) -> SharedTessellations {
-        let keys: Vec<Option<SurfaceKey>> = scene
+        if !enabled {
+            return SharedTessellations {
+                keys: vec![None; scene.patches.len()],
+                ..Default::default()
+            };
+        }
+        let mut keys: Vec<Option<Share>> = scene
             .patches
             .iter()
-            .map(|p| shared_surface(p).filter(|_| enabled))
+            .map(|p| {
+                shared_surface(p).map(|(a, s)| Share {
+                    key: SurfaceKey::Placed(a, s),
+                    source: p.id,
+                    delta: glam::DVec3::ZERO,
+                    deviation: 0.0,
+                })
+            })
             .collect();
+        translated_classes(scene, &mut keys);
         let mut count: HashMap<SurfaceKey, u32> = HashMap::new();
         for k in keys.iter().flatten() {
-            *count.entry(*k).or_default() += 1;
+            *count.entry(k.key).or_default() += 1;
         }
         let keys = keys
             .into_iter()
-            .map(|k| k.filter(|k| count[k] > 1))
+            .map(|k| k.filter(|k| count[&k.key] > 1))
             .collect();
         SharedTessellations {
             keys,
@@ -80,25 +123,32 @@ impl SharedTessellations {
         let mut asked = HashSet::new();
         let mut copies = 0u64;
         for &(i, level) in jobs {
-            let Some(k) = self.keys.get(i).copied().flatten() else {
+            let Some(share) = self.keys.get(i).copied().flatten() else {
                 continue;
             };
             copies += 1;
-            let key = (k, level);
+            let key = (share.key, level);
             match self.meshes.get_mut(&key) {
                 Some(entry) => entry.1 = frame,
                 None => {
                     if asked.insert(key) {
-                        missing.push((key, i));
+                        missing.push((key, share.source as usize));
                     }
                 }
             }
         }
         let made: Vec<PatchMesh> = missing
             .par_iter()
-            .map_init(Tessellators::new, |t, &((_, level), i)| {
+            .map_init(Tessellators::new, |t, &((key, level), i)| {
                 let mut mesh = PatchMesh::default();
-                t.unplaced(&scene.patches[i], levels.eps(level), &mut mesh);
+                match key {
+                    SurfaceKey::Placed(..) => {
+                        t.unplaced(&scene.patches[i], levels.eps(level), &mut mesh)
+                    }
+                    SurfaceKey::Translated(_) => {
+                        t.patch(&scene.patches[i], levels.eps(level), &mut mesh)
+                    }
+                }
                 mesh
             })
             .collect();
@@ -113,7 +163,13 @@ impl SharedTessellations {
             .map_init(Tessellators::new, |t, (&(i, level), cut)| {
                 let patch = &scene.patches[i];
                 match keys.get(i).copied().flatten() {
-                    Some(k) => placed(&meshes[&(k, level)].0, patch),
+                    Some(share) => {
+                        let shared = &meshes[&(share.key, level)].0;
+                        match share.key {
+                            SurfaceKey::Placed(..) => placed(shared, patch),
+                            SurfaceKey::Translated(_) => translated(shared, patch, &share),
+                        }
+                    }
                     None => {
                         let mut mesh = PatchMesh::default();
                         t.patch_from(patch, levels.eps(level), cut, &mut mesh);
@@ -130,5 +186,62 @@ impl SharedTessellations {
         self.meshes
             .retain(|_, (_, used)| *used + KEEP_FRAMES > frame);
         self.frame += 1;
+    }
+}
+
+/// A copy of `source` (the tessellation of the first patch of `share`'s class) for `patch`:
+/// translated by `share.delta`, its error raised by `share.deviation`.
+fn translated(source: &PatchMesh, patch: &crate::model::Patch, share: &Share) -> PatchMesh {
+    let mut out = source.clone();
+    out.patch_id = patch.id;
+    out.color = patch.color;
+    for p in &mut out.positions {
+        *p = (p.as_dvec3() + share.delta).as_vec3();
+    }
+    out.error += share.deviation;
+    out
+}
+
+/// Groups the Bézier patches of `scene` whose control points agree after translation (module
+/// doc) and marks them in `keys`: the first of each class is its source.
+fn translated_classes(scene: &Scene, keys: &mut [Option<Share>]) {
+    use crate::model::PatchSurface;
+    let quantum = (scene.bbox_diagonal() * TRANSLATION_TOLERANCE).max(f64::MIN_POSITIVE);
+    let mut classes: HashMap<(usize, usize, Vec<i64>), (u32, u32)> = HashMap::new();
+    for (i, p) in scene.patches.iter().enumerate() {
+        let PatchSurface::Bezier(b) = &p.surface else {
+            continue;
+        };
+        let cps = b.control_points();
+        let origin = cps[0];
+        let shape: Vec<i64> = cps
+            .iter()
+            .flat_map(|c| (*c - origin).to_array())
+            .map(|x| (x / quantum).round() as i64)
+            .collect();
+        let (du, dv) = b.degree();
+        let next = classes.len() as u32;
+        let &mut (class, source) = classes.entry((du, dv, shape)).or_insert((next, i as u32));
+        let deviation = match &scene.patches[source as usize].surface {
+            PatchSurface::Bezier(s) => {
+                let s_origin = s.control_points()[0];
+                cps.iter()
+                    .zip(s.control_points())
+                    .map(|(c, sc)| ((*c - origin) - (*sc - s_origin)).length())
+                    .fold(0.0, f64::max)
+            }
+            _ => 0.0,
+        };
+        let delta = origin
+            - match &scene.patches[source as usize].surface {
+                PatchSurface::Bezier(s) => s.control_points()[0],
+                _ => origin,
+            };
+        keys[i] = Some(Share {
+            key: SurfaceKey::Translated(class),
+            source,
+            delta,
+            deviation,
+        });
     }
 }
