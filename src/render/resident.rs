@@ -197,6 +197,15 @@ impl Built {
     }
 }
 
+/// Draws of the index streams past which their pools are packed in draw order.
+const PACK_DRAWS: usize = 256;
+
+/// Whether a pool is worth packing: a quarter or more of it free, in more than 64 ranges,
+/// the longest under half of the free units.
+fn fragmented(a: &Allocator) -> bool {
+    a.free() * 4 >= a.capacity() && a.free_ranges() > 64 && a.largest_free() * 2 < a.free()
+}
+
 /// A patch's strips as a block that concatenates with its neighbours' (see the module doc).
 fn strip_block(local: &[u32], join: Join) -> Vec<u32> {
     match join {
@@ -278,6 +287,8 @@ pub struct ResidentGeometry {
     pools: [Pool; STREAMS],
     slots: Vec<Slot>,
     generation: Option<u64>,
+    /// The patches of the last update (scene indices, in order).
+    drawn: Vec<usize>,
     draws: DrawList,
     /// Indirect arguments of the draw list.
     args: Option<wgpu::Buffer>,
@@ -319,6 +330,7 @@ impl ResidentGeometry {
             ],
             slots: Vec::new(),
             generation: None,
+            drawn: Vec::new(),
             draws: DrawList::default(),
             args: None,
             fault: Fault::None,
@@ -377,7 +389,10 @@ impl ResidentGeometry {
             stats.patches = built.len();
             self.place(renderer, built, &mut stats);
         }
-        self.rebuild_draws(renderer, &drawn, &mut stats);
+        self.drawn = drawn.iter().map(|d| d.0).collect();
+        let order = std::mem::take(&mut self.drawn);
+        self.rebuild_draws(renderer, &order, &mut stats);
+        self.drawn = order;
         stats
     }
 
@@ -424,11 +439,22 @@ impl ResidentGeometry {
                 self.slots[b.slot].ranges[p] = Some((start, len));
             }
         }
-        // Unchanged patches whose vertices moved: their index streams again.
+        // Pools left fragmented: packed again (the merged draws follow patch order again).
+        for p in 0..STREAMS {
+            if fragmented(&self.pools[p].alloc) {
+                self.compact(gpu, p, &mut moved, stats);
+            }
+        }
+        stats.geometry_bytes += self.write(gpu, &built);
         let fresh: std::collections::HashSet<usize> = built.iter().map(|b| b.slot).collect();
+        moved.retain(|i| !fresh.contains(i));
+        self.reindex(renderer, moved, stats);
+    }
+
+    /// Writes the index streams of the slots `moved` again (their vertices moved).
+    fn reindex(&mut self, renderer: &Renderer, mut moved: Vec<usize>, stats: &mut UploadStats) {
         moved.sort_unstable();
         moved.dedup();
-        moved.retain(|i| !fresh.contains(i));
         let reindexed: Vec<Built> = moved
             .par_iter()
             .filter_map(|&i| {
@@ -437,16 +463,44 @@ impl ResidentGeometry {
                 Some(Built::new(renderer, i, mesh, s.strips.clone(), true))
             })
             .collect();
-        stats.geometry_bytes += self.write(gpu, &built);
-        stats.reindexed_bytes += self.write(gpu, &reindexed);
+        stats.reindexed_bytes += self.write(&renderer.gpu, &reindexed);
+    }
+
+    /// Packs every pool in patch order now (each slot's ranges adjacent to its neighbours',
+    /// so the draws of patches in a row merge), writes the index streams of the patches whose
+    /// vertices moved and rebuilds the draw list.
+    pub fn compact_all(&mut self, renderer: &Renderer) -> UploadStats {
+        let mut stats = UploadStats::default();
+        let mut moved = Vec::new();
+        for p in 0..STREAMS {
+            self.compact(&renderer.gpu, p, &mut moved, &mut stats);
+        }
+        self.reindex(renderer, moved, &mut stats);
+        let drawn = std::mem::take(&mut self.drawn);
+        self.rebuild_draws(renderer, &drawn, &mut stats);
+        self.drawn = drawn;
+        stats
     }
 
     /// Packs pool `p` in patch order; records the slots whose vertices moved in `moved`.
     fn compact(&mut self, gpu: &Gpu, p: usize, moved: &mut Vec<usize>, stats: &mut UploadStats) {
-        let order: Vec<u64> = self
-            .slots
+        let all: Vec<usize> = (0..self.slots.len()).collect();
+        self.compact_in(gpu, p, &all, moved, stats);
+    }
+
+    /// Packs pool `p` with the ranges of the slots `first` in front, in that order (the
+    /// others after them by address); records the slots whose vertices moved in `moved`.
+    fn compact_in(
+        &mut self,
+        gpu: &Gpu,
+        p: usize,
+        first: &[usize],
+        moved: &mut Vec<usize>,
+        stats: &mut UploadStats,
+    ) {
+        let order: Vec<u64> = first
             .iter()
-            .filter_map(|s| s.ranges[p].map(|r| r.0))
+            .filter_map(|&i| self.slots[i].ranges[p].map(|r| r.0))
             .collect();
         let (moves, copied) = self.pools[p].compact(gpu, order);
         stats.copied_bytes += copied;
@@ -496,15 +550,34 @@ impl ResidentGeometry {
         written
     }
 
-    /// The draw list of `drawn` (see the module doc), with its indirect arguments.
-    fn rebuild_draws(
-        &mut self,
+    /// The draw list of `drawn` (see the module doc), with its indirect arguments. When the
+    /// index streams split into more than [`PACK_DRAWS`] draws, their pools are packed with
+    /// the drawn patches in front, in order (a GPU-side copy; indices do not change), so each
+    /// stream is one draw again.
+    fn rebuild_draws(&mut self, renderer: &Renderer, drawn: &[usize], stats: &mut UploadStats) {
+        let mut d = self.collect_draws(renderer, drawn, stats);
+        let split: usize = INDEX_STREAMS.iter().map(|&p| d.ranges[p].len()).sum();
+        if split > PACK_DRAWS {
+            let mut moved = Vec::new();
+            for p in INDEX_STREAMS {
+                self.compact_in(&renderer.gpu, p, drawn, &mut moved, stats);
+            }
+            d = self.collect_draws(renderer, drawn, stats);
+        }
+        stats.rebuilt = true;
+        self.write_args(renderer, &mut d, stats);
+        self.draws = d;
+    }
+
+    /// The merged draws of `drawn`, no arguments yet.
+    fn collect_draws(
+        &self,
         renderer: &Renderer,
-        drawn: &[(usize, &Arc<PatchMesh>)],
+        drawn: &[usize],
         stats: &mut UploadStats,
-    ) {
+    ) -> DrawList {
         let mut d = DrawList::default();
-        for &(i, _) in drawn {
+        for &i in drawn {
             let slot = &self.slots[i];
             for p in INDEX_STREAMS {
                 if let Some(r) = slot.ranges[p] {
@@ -519,7 +592,11 @@ impl ResidentGeometry {
                     .1;
             }
         }
-        stats.rebuilt = true;
+        d
+    }
+
+    /// Writes the indirect arguments of `d` (on devices that draw indirect).
+    fn write_args(&mut self, renderer: &Renderer, d: &mut DrawList, stats: &mut UploadStats) {
         if renderer.gpu.indirect {
             let mut args: Vec<u8> = Vec::with_capacity(d.draw_count() * DRAW_ARGS_BYTES as usize);
             let mut n = 0u32;
@@ -565,7 +642,6 @@ impl ResidentGeometry {
                 }
             }
         }
-        self.draws = d;
     }
 
     /// Merged draws of the current draw list (all streams, static ranges included).

@@ -56,6 +56,11 @@ impl Allocator {
         self.capacity - self.used
     }
 
+    /// Free ranges (1 when packed).
+    pub fn free_ranges(&self) -> usize {
+        self.free.len()
+    }
+
     /// The longest free range.
     pub fn largest_free(&self) -> u64 {
         self.free.values().copied().max().unwrap_or(0)
