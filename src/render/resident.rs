@@ -13,10 +13,10 @@
 //! coalesced free list). A pool that runs out of free units grows by reallocation: a new
 //! buffer at least 1.5× larger, the old contents copied on the GPU (`copy_buffer_to_buffer`),
 //! every range where it was. When the free units suffice but no free range is long enough
-//! (fragmentation), the pool is compacted: its live ranges packed into a new buffer in patch
-//! order, and the patches whose vertices moved get their index streams written again (indices
-//! are stored already offset by the patch's vertex base, so a moved vertex range invalidates
-//! them).
+//! (fragmentation), or when a quarter of it is free in many small ranges, the pool is
+//! compacted: its live ranges packed into a new buffer in patch order, and the patches whose
+//! vertices moved get their index streams written again (indices are stored already offset by
+//! the patch's vertex base, so a moved vertex range invalidates them).
 //!
 //! Per scene patch a slot holds its ranges and the `Arc<PatchMesh>` it was built from (held,
 //! so the identity cannot be reused by another mesh). [`ResidentGeometry::update`] walks the
@@ -29,7 +29,11 @@
 //!
 //! **Draws.** The draw list is rebuilt from the patches in the frustum (cost ∝ patches drawn)
 //! when the generation changed: per index stream, in patch order, ranges adjacent in the
-//! buffer merged into one draw. Strips are stored as self-contained blocks that concatenate:
+//! buffer merged into one draw. Re-tessellated patches land wherever first fit puts them, so
+//! the draws split over the frames (on grid32, 20 000 after ten frames, each ~35 µs on
+//! lavapipe); past [`PACK_DRAWS`] the index pools are packed with the drawn patches in front,
+//! in draw order — a GPU-side copy, the indices keep their values — and each stream is one
+//! draw again. Strips are stored as self-contained blocks that concatenate:
 //! ending in a restart (primitive restart), or, joined by zero-area windows
 //! ([`Join::Degenerate`]), opening with the first index twice more and padded to an even
 //! length, so every strip keeps its parity inside a merged draw. With indirect draws
