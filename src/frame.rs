@@ -5,10 +5,15 @@
 //! within the time budget ([`FrameLoop::update`]), upload what changed, draw surfaces and fat
 //! borders (each patch's border as wide as its own current ε, so the frame is crack-free while
 //! the queue is behind), read the patch-ID buffer back for the next frame's visibility, and
-//! report the screen-space errors. An animation moves patches: they are tessellated for where
-//! they are drawn (moved bounding spheres) and translated at upload. Optionally the frame is
-//! judged against the watertight reference ([`crate::check::crack::Judge`]), with fat borders
-//! as drawn and, as a control, without them.
+//! report the screen-space errors.
+//!
+//! The default frame keeps the geometry resident ([`ResidentGeometry`]): only the patches
+//! whose tessellation changed are uploaded, and the draw list is rebuilt only when the frame
+//! loop's generation moved. An animation moves patches: they are tessellated for where they
+//! are drawn (moved bounding spheres) and translated at upload; moved and heat-mapped frames
+//! change every mesh's vertices, so they go through [`Renderer::upload`] whole. Optionally the
+//! frame is judged against the watertight reference ([`crate::check::crack::Judge`]), with fat
+//! borders as drawn and, as a control, without them.
 
 use std::time::{Duration, Instant};
 
@@ -17,7 +22,10 @@ use glam::DVec3;
 use crate::check::crack::{CheckError, CrackCounts, Judge, Verdict, reference_meshes};
 use crate::lod::{FrameLoop, LodOptions, UpdateStats};
 use crate::model::Scene;
-use crate::render::{FatBorders, Frame, GpuMeshes, RenderOptions, Renderer, Shading};
+use crate::render::{
+    FatBorders, Frame, Geometry, GpuMeshes, RenderOptions, Renderer, ResidentGeometry, Shading,
+    UploadStats,
+};
 use crate::tessellate::PatchMesh;
 use crate::view::View;
 
@@ -26,9 +34,10 @@ use crate::view::View;
 #[derive(Debug)]
 pub struct FrameState {
     pub lod: FrameLoop,
-    /// The uploaded meshes and the LOD generation they were made from (`None` = always
-    /// uploaded again: moved or recoloured meshes).
-    uploaded: Option<(Option<u64>, GpuMeshes)>,
+    /// The default path's geometry, resident between frames (made on first use).
+    resident: Option<ResidentGeometry>,
+    /// The meshes of the last moved or heat-mapped frame, uploaded whole.
+    uploaded: Option<GpuMeshes>,
     /// Milliseconds spent on the last upload.
     pub upload_ms: f64,
 }
@@ -38,18 +47,27 @@ impl FrameState {
     pub fn new(scene: &Scene, view: &View, options: LodOptions) -> FrameState {
         FrameState {
             lod: FrameLoop::new(scene, view, options),
+            resident: None,
             uploaded: None,
             upload_ms: 0.0,
         }
     }
 
-    /// Uploads the current meshes now (e.g. to time the first upload apart from the first
-    /// frame); later frames upload again only when the LOD changed them.
-    pub fn upload(&mut self, renderer: &Renderer) {
+    /// Makes the current meshes resident now (e.g. to time the first upload apart from the
+    /// first frame); later default frames upload only the patches the LOD changed.
+    pub fn upload(&mut self, renderer: &Renderer) -> UploadStats {
         let t0 = Instant::now();
-        let gpu = renderer.upload(self.lod.meshes());
+        let resident = self
+            .resident
+            .get_or_insert_with(|| ResidentGeometry::new(renderer));
+        let stats = resident.update(renderer, self.lod.shared_meshes(), self.lod.generation());
         self.upload_ms = t0.elapsed().as_secs_f64() * 1e3;
-        self.uploaded = Some((Some(self.lod.generation()), gpu));
+        stats
+    }
+
+    /// The resident geometry (after the first default frame or [`FrameState::upload`]).
+    pub fn resident(&self) -> Option<&ResidentGeometry> {
+        self.resident.as_ref()
     }
 }
 
@@ -73,6 +91,25 @@ pub struct StepResult {
     pub stats: UpdateStats,
     /// Update, upload, draw and ID readback (the check is not timed).
     pub frame_time: Duration,
+    /// Wall time of the upload: the resident geometry's update (changed patches built and
+    /// written, draw list rebuilt), or a whole [`Renderer::upload`] for moved / heat-mapped
+    /// frames.
+    pub upload_ms: f64,
+    /// Wall time of the render: encoding, submission, the GPU's work and the readback of the
+    /// colour and patch-ID passes.
+    pub draw_ms: f64,
+    /// `frame_time` less the time blocked waiting for the GPU (the polls until each pass's
+    /// readback buffer is mapped, [`crate::render::RenderStats::gpu_wait`]): the LOD update,
+    /// the upload, encoding and submitting the passes, copying the read-back rows and the
+    /// visibility pass. (On a software adapter, rasterization that runs at submission on the
+    /// calling thread counts as CPU here.)
+    pub cpu_ms: f64,
+    /// Bytes written to the GPU: changed patches' geometry, static buffers built, indirect
+    /// draw arguments ([`UploadStats::uploaded_bytes`]) — or every byte of a whole upload —
+    /// plus the uniform block of each pass.
+    pub uploaded_bytes: u64,
+    /// The resident geometry's update (default frames; `None` for moved / heat-mapped ones).
+    pub upload: Option<UploadStats>,
     /// Largest and 99th-percentile screen-space error of the visible patches, pixels.
     pub max_error_px: f64,
     pub p99_error_px: f64,
@@ -96,21 +133,20 @@ pub fn step(
     let moved = offsets.map(|o| crate::anim::moved_scene(scene, o));
     let drawn_scene = moved.as_ref().unwrap_or(scene);
     let stats = state.lod.update(drawn_scene, view);
-    let generation = (offsets.is_none() && !opts.heat_map).then(|| state.lod.generation());
-    let gpu = match &mut state.uploaded {
-        Some((made_for, gpu)) if generation.is_some() && *made_for == generation => gpu,
-        slot => {
-            let t0 = Instant::now();
-            let gpu = if offsets.is_none() && !opts.heat_map {
-                renderer.upload(state.lod.meshes())
-            } else {
-                renderer.upload(&drawn_meshes(&state.lod, offsets, opts.heat_map))
-            };
-            state.upload_ms = t0.elapsed().as_secs_f64() * 1e3;
-            &mut slot.insert((generation, gpu)).1
-        }
+    let t_upload = Instant::now();
+    let (geometry, upload, upload_bytes) = if offsets.is_none() && !opts.heat_map {
+        let resident = state
+            .resident
+            .get_or_insert_with(|| ResidentGeometry::new(renderer));
+        let u = resident.update(renderer, state.lod.shared_meshes(), state.lod.generation());
+        (Geometry::Resident(resident), Some(u), u.uploaded_bytes())
+    } else {
+        let gpu = renderer.upload(&drawn_meshes(&state.lod, offsets, opts.heat_map));
+        let bytes = gpu.uploaded_bytes();
+        (Geometry::Uploaded(state.uploaded.insert(gpu)), None, bytes)
     };
-    let gpu = &*gpu;
+    let upload_ms = t_upload.elapsed().as_secs_f64() * 1e3;
+    state.upload_ms = upload_ms;
     let draw = RenderOptions {
         ids: true,
         shading: if opts.heat_map {
@@ -120,11 +156,15 @@ pub fn step(
         },
         ..opts.draw
     };
-    let frame = renderer.render(gpu, view, &draw)?;
+    let t_draw = Instant::now();
+    let frame = renderer.render(geometry, view, &draw)?;
+    let draw_ms = t_draw.elapsed().as_secs_f64() * 1e3;
+    let drawn = renderer.last_render();
     if let Some(v) = frame.visible_ids(scene.patches.len()) {
         state.lod.set_visible(&v);
     }
     let frame_time = start.elapsed();
+    let cpu_ms = frame_time.saturating_sub(drawn.gpu_wait).as_secs_f64() * 1e3;
     let (max_error_px, p99_error_px) = state.lod.screen_errors();
     let (verdict, control) = if opts.check {
         // At the pixel error asked: a patch drawn coarser than asked (the queue behind its
@@ -135,11 +175,11 @@ pub fn step(
             reference = crate::anim::translated(reference.iter().enumerate(), o);
         }
         let judge = Judge::new(renderer, &reference, view, pe)?;
-        let verdict = judge.count(renderer, gpu, opts.draw.fat_borders)?;
+        let verdict = judge.count(renderer, geometry, opts.draw.fat_borders)?;
         let control = if opts.draw.fat_borders == FatBorders::Off {
             None
         } else {
-            Some(judge.count(renderer, gpu, FatBorders::Off)?.counts)
+            Some(judge.count(renderer, geometry, FatBorders::Off)?.counts)
         };
         (Some(verdict), control)
     } else {
@@ -149,6 +189,11 @@ pub fn step(
         frame,
         stats,
         frame_time,
+        upload_ms,
+        draw_ms,
+        cpu_ms,
+        uploaded_bytes: upload_bytes + drawn.uniform_bytes,
+        upload,
         max_error_px,
         p99_error_px,
         verdict,

@@ -71,6 +71,14 @@ pub struct FrameRecord {
     /// draw, ID readback.
     pub frame_ms: f64,
     pub tessellation_ms: f64,
+    /// Upload (only the patches that changed, see `frame::StepResult::upload_ms`).
+    pub upload_ms: f64,
+    /// Render and readback wall time.
+    pub draw_ms: f64,
+    /// The frame less the time blocked waiting for the GPU (`frame::StepResult::cpu_ms`).
+    pub cpu_ms: f64,
+    /// Bytes written to the GPU (`frame::StepResult::uploaded_bytes`).
+    pub uploaded_bytes: u64,
     pub retessellated: usize,
     pub from_cache: usize,
     pub queue_left: usize,
@@ -92,8 +100,14 @@ pub struct FrameRecord {
 pub struct FlythroughSummary {
     pub initial_ms: f64,
     /// First upload of the drawn meshes, before the first frame (builds static buffers and
-    /// strips).
+    /// strips), and its bytes.
     pub initial_upload_ms: f64,
+    pub initial_upload_bytes: u64,
+    /// Bytes uploaded per frame: mean and largest.
+    pub mean_uploaded_bytes: f64,
+    pub max_uploaded_bytes: u64,
+    pub p50_cpu_ms: f64,
+    pub p99_cpu_ms: f64,
     pub jump_frame: usize,
     /// Wall time from the jump frame until every visible patch is within the pixel error
     /// (`None`: never within the run), and the frames it took.
@@ -132,7 +146,7 @@ pub fn run(
     };
     let mut records = Vec::with_capacity(n);
     // GPU buffers are rebuilt only when the drawn meshes change.
-    state.upload(renderer);
+    let initial_upload = state.upload(renderer);
     let initial_upload_ms = state.upload_ms;
     for i in 0..n {
         let view = camera_path(scene, i, n, opts.fov_y, opts.size);
@@ -142,6 +156,10 @@ pub fn run(
             frame: i,
             frame_ms: r.frame_time.as_secs_f64() * 1e3,
             tessellation_ms: r.stats.tessellation.as_secs_f64() * 1e3,
+            upload_ms: r.upload_ms,
+            draw_ms: r.draw_ms,
+            cpu_ms: r.cpu_ms,
+            uploaded_bytes: r.uploaded_bytes,
             retessellated: r.stats.retessellated,
             from_cache: r.stats.from_cache,
             queue_left: r.stats.queue_left,
@@ -161,6 +179,7 @@ pub fn run(
     let mut summary = summarize(&records, initial_ms, jump_frames(n).1);
     summary.initial_upload_ms = initial_upload_ms;
     summary.instancing = state.lod.instancing();
+    summary.initial_upload_bytes = initial_upload.uploaded_bytes();
     Ok((records, summary))
 }
 
@@ -176,6 +195,8 @@ fn percentile(values: &mut [f64], q: f64) -> f64 {
 pub fn summarize(records: &[FrameRecord], initial_ms: f64, jump_frame: usize) -> FlythroughSummary {
     let mut frame: Vec<f64> = records.iter().map(|r| r.frame_ms).collect();
     let mut tess: Vec<f64> = records.iter().map(|r| r.tessellation_ms).collect();
+    let mut cpu: Vec<f64> = records.iter().map(|r| r.cpu_ms).collect();
+    let bytes: Vec<u64> = records.iter().map(|r| r.uploaded_bytes).collect();
     let mut converge_ms = None;
     let mut converge_frames = None;
     let mut elapsed = 0.0;
@@ -192,6 +213,11 @@ pub fn summarize(records: &[FrameRecord], initial_ms: f64, jump_frame: usize) ->
     FlythroughSummary {
         initial_ms,
         initial_upload_ms: 0.0,
+        initial_upload_bytes: 0,
+        mean_uploaded_bytes: bytes.iter().sum::<u64>() as f64 / bytes.len().max(1) as f64,
+        max_uploaded_bytes: bytes.iter().copied().max().unwrap_or(0),
+        p50_cpu_ms: percentile(&mut cpu.clone(), 0.5),
+        p99_cpu_ms: percentile(&mut cpu, 0.99),
         jump_frame,
         converge_ms,
         converge_frames,

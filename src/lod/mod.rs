@@ -420,6 +420,15 @@ impl FrameLoop {
             .map(|&i| (i as usize, self.patches[i as usize].mesh.as_ref()))
     }
 
+    /// As [`FrameLoop::meshes_with_index`], each mesh as the `Arc` the loop holds: a new
+    /// `Arc` exactly when the patch's tessellation changed (resident GPU geometry uploads
+    /// only those).
+    pub fn shared_meshes(&self) -> impl Iterator<Item = (usize, &Arc<PatchMesh>)> {
+        self.seen
+            .iter()
+            .map(|&i| (i as usize, &self.patches[i as usize].mesh))
+    }
+
     /// Largest and 99th-percentile screen-space error (pixels) over the patches visible in
     /// the last frame and inside the frustum: pixel error × ε_c / ε_w.
     pub fn screen_errors(&self) -> (f64, f64) {

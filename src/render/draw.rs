@@ -1,16 +1,19 @@
 //! One frame: surfaces, then the fat borders of every border vertex, into the targets.
 
 use super::*;
-use super::{pipelines::*, readback::*, upload::*};
+use super::{pipelines::*, readback::*};
 
 impl Renderer {
-    /// Renders `meshes` for `view` and reads the image (and depth, if asked) back.
-    pub fn render(
+    /// Renders `geometry` ([`GpuMeshes`] or [`ResidentGeometry`]) for `view` and reads the
+    /// image (and depth, if asked) back.
+    pub fn render<'a>(
         &mut self,
-        meshes: &GpuMeshes,
+        geometry: impl Into<Geometry<'a>>,
         view: &View,
         opts: &RenderOptions,
     ) -> Result<Frame, RenderError> {
+        let meshes = geometry.into();
+        self.last = RenderStats::default();
         let (w, h) = (view.width, view.height);
         let max = self.gpu.max_texture_side();
         if w == 0 || h == 0 {
@@ -138,7 +141,7 @@ impl Renderer {
     #[allow(clippy::too_many_arguments)]
     pub(super) fn draw(
         &mut self,
-        meshes: &GpuMeshes,
+        meshes: Geometry<'_>,
         globals: &Globals,
         opts: &RenderOptions,
         target: Target,
@@ -157,6 +160,7 @@ impl Renderer {
         self.gpu
             .queue
             .write_buffer(&targets.uniform, 0, bytemuck::bytes_of(globals));
+        self.last.uniform_bytes += size_of::<Globals>() as u64;
         let (resolved_view, msaa_view, depth_view, bind) = (
             &targets.resolved_view,
             &targets.msaa_view,
@@ -193,54 +197,13 @@ impl Renderer {
                 multiview_mask: None,
             });
             pass.set_bind_group(0, bind, &[]);
-            for (pipeline, indices, count) in [
-                (&pipes.surface, &meshes.indices, meshes.index_count),
-                (
-                    &pipes.surface_strip,
-                    &meshes.strip_indices,
-                    meshes.strip_index_count,
-                ),
-            ] {
-                if count > 0 {
-                    pass.set_pipeline(pipeline);
-                    pass.set_vertex_buffer(0, meshes.vertices.slice(..));
-                    pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
-                    pass.draw_indexed(0..count, 0, 0..1);
+            match meshes {
+                Geometry::Uploaded(m) => m.encode(&mut pass, pipes, opts.fat_borders),
+                Geometry::Resident(r) => {
+                    r.encode(&mut pass, pipes, opts.fat_borders, self.gpu.indirect)
                 }
-            }
-            if !meshes.statics.is_empty() {
-                for (patch, first, count) in &meshes.statics {
-                    pass.set_pipeline(match patch.strips {
-                        Some(_) => &pipes.surface_strip,
-                        None => &pipes.surface,
-                    });
-                    pass.set_vertex_buffer(0, patch.vertices.slice(..));
-                    let indices = patch.strips.as_ref().map_or(&patch.indices, |s| &s.indices);
-                    pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
-                    match &meshes.indirect {
-                        Some(args) => pass.multi_draw_indexed_indirect(
-                            args,
-                            *first as u64 * DRAW_ARGS_BYTES,
-                            *count,
-                        ),
-                        None => {
-                            let ranges = &meshes.ranges[*first as usize..(first + count) as usize];
-                            for &[start, len] in ranges {
-                                pass.draw_indexed(start..start + len, 0, 0..1);
-                            }
-                        }
-                    }
-                }
-            }
-            if let Some((indices, count)) = meshes.border_indices(opts.fat_borders)
-                && *count > 0
-            {
-                pass.set_pipeline(&pipes.border);
-                pass.set_vertex_buffer(0, meshes.border_vertices.slice(..));
-                pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
-                pass.draw_indexed(0..*count, 0, 0..1);
             }
         }
-        read_texture(&self.gpu, encoder, targets)
+        read_texture(&self.gpu, encoder, targets, &mut self.last.gpu_wait)
     }
 }

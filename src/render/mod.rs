@@ -1,11 +1,14 @@
 //! Headless wgpu renderer: patch surfaces, then their fat borders, into an offscreen texture
 //! of any size with a depth buffer, read back with rows padded to 256 bytes.
 //!
-//! One frame = one indexed draw of every patch's triangles (mesh patches drawn as cuts of
-//! their hierarchies instead draw index ranges of buffers built once per patch — one
-//! multi-draw-indirect per patch, Holst's static arcs — so a new cut uploads only its ranges), then (unless fat borders are off)
-//! one indexed draw of the chosen fat-border template over every border vertex (no instancing:
-//! llvmpipe pays a fixed cost per instance). Shading:
+//! Geometry comes two ways ([`Geometry`]): [`Renderer::upload`] builds one vertex/index buffer
+//! of every given mesh ([`GpuMeshes`], one-shot users), and [`ResidentGeometry`] keeps every
+//! patch's geometry in suballocated buffers between frames and uploads only the patches that
+//! changed (the frame loop's default path). Either way a frame draws every patch's triangles
+//! (mesh patches drawn as cuts of their hierarchies instead draw index ranges of buffers built
+//! once per patch — one multi-draw-indirect per patch, Holst's static arcs — so a new cut
+//! uploads only its ranges), then (unless fat borders are off) the chosen fat-border template
+//! over every border vertex (no instancing: llvmpipe pays a fixed cost per instance). Shading:
 //! `lit` (two-sided: CAD patches are not consistently oriented, so there is no back-face
 //! culling), `flat` (one colour) and `ids` (a colour per patch). Optionally a second pass at one
 //! sample writes the linear view-space depth (f32 bits in an `R32Uint` target: float targets
@@ -17,11 +20,13 @@ pub mod fat_border;
 pub mod gpu;
 mod pipelines;
 mod readback;
+pub mod resident;
 pub mod shaders;
 mod upload;
 
 pub use fat_border::{BorderGeometry, BorderVertex, FatBorders};
 pub use gpu::{Gpu, RenderError};
+pub use resident::{ResidentGeometry, UploadStats};
 pub use upload::GpuMeshes;
 
 use pipelines::{Pipelines, Target, Targets};
@@ -193,6 +198,35 @@ impl Frame {
     }
 }
 
+/// What a render draws: meshes uploaded whole, or the resident geometry.
+#[derive(Clone, Copy, Debug)]
+pub enum Geometry<'a> {
+    Uploaded(&'a GpuMeshes),
+    Resident(&'a ResidentGeometry),
+}
+
+impl<'a> From<&'a GpuMeshes> for Geometry<'a> {
+    fn from(g: &'a GpuMeshes) -> Self {
+        Geometry::Uploaded(g)
+    }
+}
+
+impl<'a> From<&'a ResidentGeometry> for Geometry<'a> {
+    fn from(g: &'a ResidentGeometry) -> Self {
+        Geometry::Resident(g)
+    }
+}
+
+/// What the last [`Renderer::render`] cost beyond its geometry.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RenderStats {
+    /// Wall time blocked waiting for the GPU: `device.poll(wait)` until each pass's
+    /// readback buffer is mapped (the passes' rendering and copies finish in it).
+    pub gpu_wait: std::time::Duration,
+    /// Bytes written per pass (the uniform block of the view and shading).
+    pub uniform_bytes: u64,
+}
+
 /// Renderer: device, shader module, pipelines (built on first use per target).
 #[derive(Debug)]
 pub struct Renderer {
@@ -216,6 +250,8 @@ pub struct Renderer {
     /// primitive restart draws wrong triangles (measured on llvmpipe-GL: 22 662 of 786 432
     /// teapot pixels differ from lists) and zero-area windows join them.
     pub strip_join: Join,
+    /// Figures of the last render.
+    last: RenderStats,
 }
 
 impl Renderer {
@@ -269,10 +305,16 @@ impl Renderer {
             } else {
                 Join::Restart
             },
+            last: RenderStats::default(),
         })
     }
 
     pub fn gpu(&self) -> &Gpu {
         &self.gpu
+    }
+
+    /// GPU wait and bytes written by the last [`Renderer::render`].
+    pub fn last_render(&self) -> RenderStats {
+        self.last
     }
 }

@@ -4,11 +4,13 @@ use super::pipelines::*;
 use super::*;
 
 /// Copies the resolved target into the readback buffer (rows padded to
-/// `COPY_BYTES_PER_ROW_ALIGNMENT`, 256), maps it and strips the padding.
+/// `COPY_BYTES_PER_ROW_ALIGNMENT`, 256), maps it and strips the padding. Adds the time
+/// blocked waiting for the GPU (the poll until the buffer is mapped) to `gpu_wait`.
 pub(super) fn read_texture(
     gpu: &Gpu,
     mut encoder: wgpu::CommandEncoder,
     targets: &Targets,
+    gpu_wait: &mut std::time::Duration,
 ) -> Result<Vec<u8>, RenderError> {
     let (w, h) = targets.size;
     let (unpadded, padded) = (targets.row_bytes, targets.padded_row_bytes);
@@ -39,9 +41,10 @@ pub(super) fn read_texture(
     buffer.map_async(wgpu::MapMode::Read, .., move |r| {
         let _ = tx.send(r);
     });
-    gpu.device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .map_err(|e| RenderError::Readback(e.to_string()))?;
+    let waiting = std::time::Instant::now();
+    let polled = gpu.device.poll(wgpu::PollType::wait_indefinitely());
+    *gpu_wait += waiting.elapsed();
+    polled.map_err(|e| RenderError::Readback(e.to_string()))?;
     rx.recv()
         .map_err(|e| RenderError::Readback(e.to_string()))?
         .map_err(|e| RenderError::Readback(e.to_string()))?;

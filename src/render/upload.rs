@@ -53,6 +53,57 @@ pub(crate) fn packed_color(c: Option<[f32; 3]>) -> [u8; 4] {
     c.map_or([0; 4], |c| [q(c[0]), q(c[1]), q(c[2]), 255])
 }
 
+/// A patch-local index offset by the patch's first vertex `base` ([`crate::strips::RESTART`]
+/// stays).
+pub(super) fn offset_index(i: u32, base: u32) -> u32 {
+    if i == crate::strips::RESTART {
+        i
+    } else {
+        base + i
+    }
+}
+
+/// Appends `local` indices offset by `base` ([`offset_index`]) as bytes.
+pub(super) fn offset_indices(local: &[u32], base: u32, out: &mut Vec<u8>) {
+    out.reserve(local.len() * 4);
+    for &i in local {
+        out.extend_from_slice(&offset_index(i, base).to_le_bytes());
+    }
+}
+
+/// Records the draws of mesh patches drawn from their static buffers: per patch its ranges,
+/// from `indirect` (the buffer and the first argument of `ranges`) or one `draw_indexed`
+/// each.
+pub(super) fn encode_statics(
+    pass: &mut wgpu::RenderPass<'_>,
+    pipes: &super::pipelines::Pipelines,
+    statics: &[(Arc<StaticPatch>, u32, u32)],
+    indirect: Option<(&wgpu::Buffer, u32)>,
+    ranges: &[[u32; 2]],
+) {
+    for (patch, first, count) in statics {
+        pass.set_pipeline(match patch.strips {
+            Some(_) => &pipes.surface_strip,
+            None => &pipes.surface,
+        });
+        pass.set_vertex_buffer(0, patch.vertices.slice(..));
+        let indices = patch.strips.as_ref().map_or(&patch.indices, |s| &s.indices);
+        pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
+        match indirect {
+            Some((args, base)) => pass.multi_draw_indexed_indirect(
+                args,
+                (base + first) as u64 * DRAW_ARGS_BYTES,
+                *count,
+            ),
+            None => {
+                for &[start, len] in &ranges[*first as usize..(first + count) as usize] {
+                    pass.draw_indexed(start..start + len, 0, 0..1);
+                }
+            }
+        }
+    }
+}
+
 /// Patch meshes uploaded to the GPU: one vertex/index buffer for all surfaces, one vertex
 /// buffer of displaced fat-border vertices with an index buffer per variant.
 #[derive(Debug)]
@@ -78,6 +129,8 @@ pub struct GpuMeshes {
     /// The ranges `[first index, index count]`, for devices without indirect draws.
     pub(super) ranges: Vec<[u32; 2]>,
     pub(super) static_triangles: u32,
+    /// Bytes this upload wrote (buffers created with contents, static buffers built for it).
+    pub(super) uploaded_bytes: u64,
 }
 
 /// Per-arc strips of a mesh patch's hierarchy: the index buffer and, per arc boundary, the
@@ -108,6 +161,11 @@ pub(super) const DRAW_ARGS_BYTES: u64 = 20;
 pub(super) type StaticKey = (usize, u32, [u8; 4], Option<Join>);
 
 impl GpuMeshes {
+    /// Bytes written to the GPU by the upload that made these buffers.
+    pub fn uploaded_bytes(&self) -> u64 {
+        self.uploaded_bytes
+    }
+
     pub fn triangle_count(&self) -> u32 {
         self.triangles + self.static_triangles
     }
@@ -126,6 +184,45 @@ impl GpuMeshes {
     /// Border vertices (of the patch polylines, before expansion).
     pub fn border_vertex_count(&self) -> u32 {
         self.border_vertex_count
+    }
+
+    /// Records the draws of `variant` into `pass`.
+    pub(super) fn encode(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        pipes: &super::pipelines::Pipelines,
+        variant: FatBorders,
+    ) {
+        for (pipeline, indices, count) in [
+            (&pipes.surface, &self.indices, self.index_count),
+            (
+                &pipes.surface_strip,
+                &self.strip_indices,
+                self.strip_index_count,
+            ),
+        ] {
+            if count > 0 {
+                pass.set_pipeline(pipeline);
+                pass.set_vertex_buffer(0, self.vertices.slice(..));
+                pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(0..count, 0, 0..1);
+            }
+        }
+        encode_statics(
+            pass,
+            pipes,
+            &self.statics,
+            self.indirect.as_ref().map(|a| (a, 0)),
+            &self.ranges,
+        );
+        if let Some((indices, count)) = self.border_indices(variant)
+            && *count > 0
+        {
+            pass.set_pipeline(&pipes.border);
+            pass.set_vertex_buffer(0, self.border_vertices.slice(..));
+            pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
+            pass.draw_indexed(0..*count, 0, 0..1);
+        }
     }
 
     pub(super) fn border_indices(&self, variant: FatBorders) -> Option<&(wgpu::Buffer, u32)> {
@@ -165,25 +262,12 @@ impl Renderer {
             })
             .collect();
         let mut triangles = 0u32;
+        let mut uploaded_bytes = 0u64;
         for (i, m) in meshes.iter().copied().enumerate() {
-            if let Some(cut) = m.arcs.as_ref().filter(|_| self.draws_static(m)) {
-                let first = ranges.len() as u32;
-                let join = primitives.strips_for(m).then_some(self.strip_join);
-                let sp = self.static_patch(m, &cut.patch, join);
-                let arc_start = &cut.patch.hierarchy.arc_start;
-                for &[start, count] in &cut.ranges {
-                    static_triangles += count;
-                    match &sp.strips {
-                        Some(st) => {
-                            // Ranges cover whole arcs: map arc boundaries to strip indices.
-                            let a = arc_start.partition_point(|&x| x < start);
-                            let b = arc_start.partition_point(|&x| x < start + count);
-                            ranges.push([st.starts[a], st.starts[b] - st.starts[a]]);
-                        }
-                        None => ranges.push([start * 3, count * 3]),
-                    }
-                }
-                statics.push((sp, first, ranges.len() as u32 - first));
+            if self.draws_static(m) {
+                let (tris, bytes) = self.static_draws(m, &mut statics, &mut ranges);
+                static_triangles += tris;
+                uploaded_bytes += bytes;
                 continue;
             }
             let base = vertices.len() as u32;
@@ -199,13 +283,7 @@ impl Renderer {
                     if !s.is_empty() && !strip_indices.is_empty() {
                         strip_indices.push(crate::strips::RESTART);
                     }
-                    strip_indices.extend(s.iter().map(|&i| {
-                        if i == crate::strips::RESTART {
-                            i
-                        } else {
-                            base + i
-                        }
-                    }));
+                    strip_indices.extend(s.iter().map(|&i| offset_index(i, base)));
                 }
                 None => indices.extend(m.triangles.iter().flatten().map(|i| base + i)),
             }
@@ -214,8 +292,12 @@ impl Renderer {
             strip_indices = crate::strips::join_degenerate(&strip_indices, &mut []);
         }
         let borders = BorderGeometry::of(meshes.iter().copied());
-        let init = |label, bytes: &[u8], usage| buffer_init(&self.gpu.device, label, bytes, usage);
-        GpuMeshes {
+        let written = std::cell::Cell::new(uploaded_bytes);
+        let init = |label, bytes: &[u8], usage| {
+            written.set(written.get() + bytes.len() as u64);
+            buffer_init(&self.gpu.device, label, bytes, usage)
+        };
+        let mut gpu = GpuMeshes {
             vertices: init(
                 "vertices",
                 bytemuck::cast_slice(&vertices),
@@ -268,7 +350,43 @@ impl Renderer {
             statics,
             ranges,
             static_triangles,
+            uploaded_bytes: 0,
+        };
+        gpu.uploaded_bytes = written.get();
+        gpu
+    }
+
+    /// Appends the draws of mesh-patch cut `m` (drawn from its static buffers, see
+    /// [`Renderer::draws_static`]) to `statics` and `ranges`. Returns its triangles and the
+    /// bytes of static buffers built for it now (first use).
+    pub(super) fn static_draws(
+        &self,
+        m: &PatchMesh,
+        statics: &mut Vec<(Arc<StaticPatch>, u32, u32)>,
+        ranges: &mut Vec<[u32; 2]>,
+    ) -> (u32, u64) {
+        let Some(cut) = &m.arcs else {
+            return (0, 0);
+        };
+        let first = ranges.len() as u32;
+        let join = self.primitives.strips_for(m).then_some(self.strip_join);
+        let (sp, bytes) = self.static_patch(m, &cut.patch, join);
+        let arc_start = &cut.patch.hierarchy.arc_start;
+        let mut triangles = 0;
+        for &[start, count] in &cut.ranges {
+            triangles += count;
+            match &sp.strips {
+                Some(st) => {
+                    // Ranges cover whole arcs: map arc boundaries to strip indices.
+                    let a = arc_start.partition_point(|&x| x < start);
+                    let b = arc_start.partition_point(|&x| x < start + count);
+                    ranges.push([st.starts[a], st.starts[b] - st.starts[a]]);
+                }
+                None => ranges.push([start * 3, count * 3]),
+            }
         }
+        statics.push((sp, first, ranges.len() as u32 - first));
+        (triangles, bytes)
     }
 
     /// The static buffers of a mesh patch's hierarchy (built on first use). Entries whose
@@ -278,12 +396,12 @@ impl Renderer {
         m: &PatchMesh,
         patch: &Arc<crate::model::mesh::MeshPatch>,
         join: Option<Join>,
-    ) -> Arc<StaticPatch> {
+    ) -> (Arc<StaticPatch>, u64) {
         let color = packed_color(m.color);
         let key = (Arc::as_ptr(patch) as usize, m.patch_id, color, join);
         let mut cache = self.statics.lock().unwrap_or_else(|e| e.into_inner());
         if let Some(s) = cache.get(&key) {
-            return s.clone();
+            return (s.clone(), 0);
         }
         cache.retain(|_, s| Arc::strong_count(&s.patch) > 1);
         let vertices: Vec<SurfaceVertex> =
@@ -295,8 +413,11 @@ impl Renderer {
             .flatten()
             .copied()
             .collect();
-        let buffer =
-            |label, bytes: &[u8], usage| buffer_init(&self.gpu.device, label, bytes, usage);
+        let written = std::cell::Cell::new(0u64);
+        let buffer = |label, bytes: &[u8], usage| {
+            written.set(written.get() + bytes.len() as u64);
+            buffer_init(&self.gpu.device, label, bytes, usage)
+        };
         let s = Arc::new(StaticPatch {
             vertices: buffer(
                 "patch vertices",
@@ -329,7 +450,7 @@ impl Renderer {
             patch: patch.clone(),
         });
         cache.insert(key, s.clone());
-        s
+        (s, written.get())
     }
 }
 

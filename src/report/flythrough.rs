@@ -4,12 +4,12 @@
 use crate::drive::flythrough::FrameRecord;
 
 /// Columns of the per-frame table.
-pub const CSV_HEADER: &str = "frame,frame_ms,tessellation_ms,retessellated,from_cache,queue_length,max_error_px,p99_error_px,triangles,pixel_error,crack_pixels,crack_pixels_off";
+pub const CSV_HEADER: &str = "frame,frame_ms,tessellation_ms,retessellated,from_cache,queue_length,max_error_px,p99_error_px,triangles,pixel_error,crack_pixels,crack_pixels_off,upload_ms,draw_ms,cpu_ms,uploaded_bytes";
 
 /// One frame's row, columns as [`CSV_HEADER`].
 pub fn csv_row(r: &FrameRecord) -> String {
     format!(
-        "{},{:.3},{:.3},{},{},{},{:.4},{:.4},{},{:.4},{},{}",
+        "{},{:.3},{:.3},{},{},{},{:.4},{:.4},{},{:.4},{},{},{:.3},{:.3},{:.3},{}",
         r.frame,
         r.frame_ms,
         r.tessellation_ms,
@@ -21,7 +21,11 @@ pub fn csv_row(r: &FrameRecord) -> String {
         r.triangles,
         r.pixel_error,
         r.crack_pixels.map_or(String::new(), |c| c.to_string()),
-        r.crack_pixels_off.map_or(String::new(), |c| c.to_string())
+        r.crack_pixels_off.map_or(String::new(), |c| c.to_string()),
+        r.upload_ms,
+        r.draw_ms,
+        r.cpu_ms,
+        r.uploaded_bytes
     )
 }
 
@@ -185,6 +189,18 @@ mod tests {
         });
         assert_eq!(row.split(',').count(), cols);
         assert!(row.starts_with("3,1.000,"));
+        // The upload columns, by name.
+        let at = |name: &str| {
+            let k = CSV_HEADER
+                .split(',')
+                .position(|c| c == name)
+                .unwrap_or_else(|| panic!("no column {name}"));
+            row.split(',').nth(k).unwrap_or_default().to_owned()
+        };
+        assert_eq!(at("upload_ms"), "0.250");
+        assert_eq!(at("draw_ms"), "0.750");
+        assert_eq!(at("cpu_ms"), "0.900");
+        assert_eq!(at("uploaded_bytes"), "123456");
     }
 
     fn record(frame: usize, frame_ms: f64, pixel_error: f64) -> FrameRecord {
@@ -192,6 +208,10 @@ mod tests {
             frame,
             frame_ms,
             tessellation_ms: 0.5,
+            upload_ms: 0.25,
+            draw_ms: 0.75,
+            cpu_ms: 0.9,
+            uploaded_bytes: 123_456,
             retessellated: 1,
             from_cache: 0,
             queue_left: 0,

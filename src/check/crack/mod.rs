@@ -568,10 +568,10 @@ impl Judge {
 
     /// Draws `gpu` with fat borders `variant` (flat check colours, depth) and counts crack
     /// and growth pixels against the reference ([`classify`]).
-    pub fn count(
+    pub fn count<'a>(
         &self,
         renderer: &mut Renderer,
-        gpu: &crate::render::GpuMeshes,
+        gpu: impl Into<crate::render::Geometry<'a>>,
         variant: FatBorders,
     ) -> Result<Verdict, CheckError> {
         let actual = renderer.render(gpu, &self.view, &check_render_options(variant))?;

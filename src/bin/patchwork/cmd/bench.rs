@@ -69,6 +69,11 @@ pub struct BenchArgs {
     plot: PathBuf,
 }
 
+/// Bytes as MiB with the exact count.
+fn mib(bytes: f64) -> String {
+    format!("{:.2} MiB ({bytes:.0} bytes)", bytes / (1024.0 * 1024.0))
+}
+
 /// Whether every measured frame was crack-free.
 pub fn run(args: &BenchArgs) -> Result<bool, CliError> {
     if !args.flythrough {
@@ -123,12 +128,22 @@ pub fn run(args: &BenchArgs) -> Result<bool, CliError> {
     );
     println!("initial tessellation      {:.1} ms", summary.initial_ms);
     println!(
-        "initial upload            {:.1} ms",
-        summary.initial_upload_ms
+        "initial upload            {:.1} ms, {}",
+        summary.initial_upload_ms,
+        mib(summary.initial_upload_bytes as f64)
     );
     println!(
         "frame time                p50 {:.2} ms, p99 {:.2} ms",
         summary.p50_frame_ms, summary.p99_frame_ms
+    );
+    println!(
+        "CPU time per frame        p50 {:.2} ms, p99 {:.2} ms (frame less the GPU wait)",
+        summary.p50_cpu_ms, summary.p99_cpu_ms
+    );
+    println!(
+        "uploaded per frame        mean {}, max {}",
+        mib(summary.mean_uploaded_bytes),
+        mib(summary.max_uploaded_bytes as f64)
     );
     println!(
         "re-tessellation per frame p99 {:.2} ms (budget {} ms)",
