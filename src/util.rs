@@ -1,5 +1,6 @@
-//! Small helpers shared by several stages: integer-keyed hash maps and sets, and the
-//! process's resident memory (Linux `/proc/self/status`).
+//! Small helpers shared by several stages: integer-keyed hash maps and sets, progress of long
+//! load steps ([`Progress`], re-exported by `prep`), and the process's resident memory (Linux
+//! `/proc/self/status`).
 
 use std::collections::{HashMap, HashSet};
 use std::hash::{BuildHasherDefault, Hasher};
@@ -28,6 +29,60 @@ impl Hasher for IntHasher {
 
 pub(crate) type IntMap<K, V> = HashMap<K, V, BuildHasherDefault<IntHasher>>;
 pub(crate) type IntSet<K> = HashSet<K, BuildHasherDefault<IntHasher>>;
+
+/// Progress of long load steps (reading, probing and preparing), for whoever loads; called
+/// from worker threads. The binary draws a bar; the library itself prints nothing.
+pub trait Progress: Sync {
+    /// A step named `what` of `total` units begins.
+    fn begin(&self, what: &str, total: usize);
+    /// One more unit is done.
+    fn advance(&self);
+    /// The step is over.
+    fn end(&self);
+}
+
+/// Reports nothing.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NoProgress;
+
+impl Progress for NoProgress {
+    fn begin(&self, _: &str, _: usize) {}
+    fn advance(&self) {}
+    fn end(&self) {}
+}
+
+/// A step reported only when it has at least `min` units (short steps stay quiet); ends when
+/// dropped.
+pub(crate) struct Bar<'a>(Option<&'a dyn Progress>);
+
+impl<'a> Bar<'a> {
+    pub(crate) fn begin(
+        progress: &'a dyn Progress,
+        what: &str,
+        total: usize,
+        min: usize,
+    ) -> Bar<'a> {
+        if total < min {
+            return Bar(None);
+        }
+        progress.begin(what, total);
+        Bar(Some(progress))
+    }
+
+    pub(crate) fn advance(&self) {
+        if let Some(p) = self.0 {
+            p.advance();
+        }
+    }
+}
+
+impl Drop for Bar<'_> {
+    fn drop(&mut self) {
+        if let Some(p) = self.0 {
+            p.end();
+        }
+    }
+}
 
 /// The process's peak resident set size in bytes (`VmHWM` of `/proc/self/status`): the most
 /// physical memory it has held at once since it started. `None` where there is no such file

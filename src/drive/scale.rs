@@ -27,6 +27,7 @@ use super::flythrough::{FrameRecord, camera_path, jump_frames, summarize};
 use crate::check::crack::CheckError;
 use crate::frame::{FrameState, StepOptions, step};
 use crate::io::LoadError;
+use crate::isolate::isolated;
 use crate::lod::LodOptions;
 use crate::model::BezierPatch;
 use crate::render::{RenderOptions, Renderer};
@@ -155,9 +156,14 @@ pub struct ScalePoint {
     /// Resident size when the point starts (the renderer made, nothing loaded): what the
     /// process costs without a model.
     pub rss_start_bytes: Option<u64>,
-    /// Resident peak after loading, and at the end of the run.
+    /// Resident peak after loading, after the first tessellation, and at the end of the run.
     pub rss_load_bytes: Option<u64>,
+    pub rss_tessellate_bytes: Option<u64>,
     pub peak_rss_bytes: Option<u64>,
+    /// Why the upload or the frames stopped (a panic inside wgpu, e.g. a buffer larger than
+    /// the device allows); the load and first-tessellation figures still hold, the frame
+    /// figures are zero.
+    pub failure: Option<String>,
 }
 
 /// A point and the frames it was measured on.
@@ -182,7 +188,8 @@ pub enum ScaleError {
 }
 
 /// Measures one point (see the module doc); `on_stage` hears each stage as it begins
-/// (`"write"`, `"load"`, `"tessellate"`, `"frames"`), for progress.
+/// (`"write"`, `"load"`, `"tessellate"`, `"frames"`), for progress. A panic while uploading
+/// or drawing is caught and recorded in [`ScalePoint::failure`].
 pub fn run_point(
     renderer: &mut Renderer,
     source: &Source,
@@ -223,32 +230,46 @@ pub fn run_point(
     let mut state = FrameState::new(&scene, &first, opts.lod);
     let tessellate_ms = ms(t0);
     let lod_bytes_first = state.lod.memory().total();
-    state.upload(renderer);
-    let upload_ms = state.upload_ms;
+    let rss_tessellate_bytes = peak_rss_bytes();
 
+    // Upload and frames: a failure inside wgpu (a buffer past the device's limits) panics;
+    // it ends the point, recorded, rather than the process.
     on_stage("frames");
-    let step_opts = StepOptions {
-        draw: RenderOptions::default(),
-        ..StepOptions::default()
-    };
     let mut records = Vec::with_capacity(n);
-    for i in 0..n {
-        let view = camera_path(&scene, i, n, opts.fov_y, opts.size);
-        let r = step(renderer, &scene, &mut state, &view, &step_opts)?;
-        records.push(FrameRecord {
-            frame: i,
-            frame_ms: r.frame_time.as_secs_f64() * 1e3,
-            tessellation_ms: r.stats.tessellation.as_secs_f64() * 1e3,
-            retessellated: r.stats.retessellated,
-            from_cache: r.stats.from_cache,
-            queue_left: r.stats.queue_left,
-            max_error_px: r.max_error_px,
-            p99_error_px: r.p99_error_px,
-            triangles: r.stats.triangles,
-            pixel_error: state.lod.options.pixel_error,
-            ..FrameRecord::default()
-        });
-    }
+    let mut upload_ms = 0.0;
+    let drawn = isolated(|| -> Result<(), CheckError> {
+        state.upload(renderer);
+        upload_ms = state.upload_ms;
+        let step_opts = StepOptions {
+            draw: RenderOptions::default(),
+            ..StepOptions::default()
+        };
+        for i in 0..n {
+            let view = camera_path(&scene, i, n, opts.fov_y, opts.size);
+            let r = step(renderer, &scene, &mut state, &view, &step_opts)?;
+            records.push(FrameRecord {
+                frame: i,
+                frame_ms: r.frame_time.as_secs_f64() * 1e3,
+                tessellation_ms: r.stats.tessellation.as_secs_f64() * 1e3,
+                retessellated: r.stats.retessellated,
+                from_cache: r.stats.from_cache,
+                queue_left: r.stats.queue_left,
+                max_error_px: r.max_error_px,
+                p99_error_px: r.p99_error_px,
+                triangles: r.stats.triangles,
+                pixel_error: state.lod.options.pixel_error,
+                ..FrameRecord::default()
+            });
+        }
+        Ok(())
+    });
+    let failure = match drawn {
+        Ok(r) => {
+            r?;
+            None
+        }
+        Err(panic) => Some(last_line(&panic)),
+    };
     let jump_frame = jump_frames(n).1;
     let summary = summarize(&records, tessellate_ms, jump_frame);
     let frame_ms: Vec<f64> = records.iter().map(|r| r.frame_ms).collect();
@@ -256,12 +277,15 @@ pub fn run_point(
         model: source.label(),
         patches: scene.patches.len(),
         load_ms,
-        first_frame_ms: tessellate_ms + upload_ms + frame_ms.first().copied().unwrap_or(0.0),
+        first_frame_ms: frame_ms
+            .first()
+            .map_or(0.0, |f| tessellate_ms + upload_ms + f),
         tessellate_ms,
         upload_ms,
         frame_p50_ms: summary.p50_frame_ms,
         frame_max_ms: frame_ms.iter().copied().fold(0.0, f64::max),
-        retessellate_ms: records.iter().map(|r| r.tessellation_ms).sum::<f64>() / n as f64,
+        retessellate_ms: records.iter().fold(0.0, |a, r| a + r.tessellation_ms)
+            / records.len().max(1) as f64,
         cpu_ms: None,
         uploaded_bytes: None,
         frames: n,
@@ -274,9 +298,21 @@ pub fn run_point(
         lod_bytes_last: state.lod.memory().total(),
         rss_start_bytes,
         rss_load_bytes,
+        rss_tessellate_bytes,
         peak_rss_bytes: peak_rss_bytes(),
+        failure,
     };
     Ok(PointRun { point, records })
+}
+
+/// The last non-empty line of a (wgpu) panic message, where it says what was wrong.
+fn last_line(message: &str) -> String {
+    message
+        .lines()
+        .map(str::trim)
+        .rfind(|l| !l.is_empty())
+        .unwrap_or(message)
+        .to_owned()
 }
 
 fn ms(t0: Instant) -> f64 {

@@ -5,14 +5,27 @@
 use crate::drive::scale::ScalePoint;
 
 /// Columns of the CSV table (times in ms, memory in bytes; an empty cell = not measured).
-pub const CSV_HEADER: &str = "model,patches,load_ms,first_frame_ms,tessellate_ms,upload_ms,frame_p50_ms,frame_max_ms,retessellate_ms,cpu_ms,uploaded_bytes,frames,jump_frame,converge_frames,triangles_first,triangles_last,scene_bytes,lod_bytes_first,lod_bytes_last,rss_start_bytes,rss_load_bytes,peak_rss_bytes";
+pub const CSV_HEADER: &str = "model,patches,load_ms,first_frame_ms,tessellate_ms,upload_ms,frame_p50_ms,frame_max_ms,retessellate_ms,cpu_ms,uploaded_bytes,frames,jump_frame,converge_frames,triangles_first,triangles_last,scene_bytes,lod_bytes_first,lod_bytes_last,rss_start_bytes,rss_load_bytes,rss_tessellate_bytes,peak_rss_bytes,failure";
 
 fn opt<T: ToString>(v: Option<T>) -> String {
     v.map_or(String::new(), |v| v.to_string())
 }
 
-/// One point's row, columns as [`CSV_HEADER`] (the model's name with commas and quotes
-/// replaced, so the row splits on commas).
+/// Text for a cell: commas, quotes and line breaks replaced by `_`, so rows split on commas.
+fn clean(s: &str) -> String {
+    s.chars()
+        .map(|c| {
+            if matches!(c, ',' | '"' | '\n' | '\r') {
+                '_'
+            } else {
+                c
+            }
+        })
+        .collect()
+}
+
+/// One point's row, columns as [`CSV_HEADER`] (the model's name and the failure through
+/// [`clean`]).
 pub fn csv_row(p: &ScalePoint) -> String {
     let model: String = p
         .model
@@ -26,7 +39,7 @@ pub fn csv_row(p: &ScalePoint) -> String {
         })
         .collect();
     format!(
-        "{model},{},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+        "{model},{},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
         p.patches,
         p.load_ms,
         p.first_frame_ms,
@@ -47,7 +60,9 @@ pub fn csv_row(p: &ScalePoint) -> String {
         p.lod_bytes_last,
         opt(p.rss_start_bytes),
         opt(p.rss_load_bytes),
+        opt(p.rss_tessellate_bytes),
         opt(p.peak_rss_bytes),
+        p.failure.as_deref().map_or(String::new(), clean),
     )
 }
 
@@ -97,7 +112,9 @@ pub fn parse_row(line: &str) -> Result<ScalePoint, String> {
         lod_bytes_last: int(18)? as usize,
         rss_start_bytes: opt_int(19)?,
         rss_load_bytes: opt_int(20)?,
-        peak_rss_bytes: opt_int(21)?,
+        rss_tessellate_bytes: opt_int(21)?,
+        peak_rss_bytes: opt_int(22)?,
+        failure: (!cells[23].is_empty()).then(|| cells[23].to_owned()),
     })
 }
 
@@ -109,33 +126,48 @@ const MB: f64 = 1024.0 * 1024.0;
 /// loading).
 pub fn markdown(points: &[ScalePoint]) -> String {
     let mut s = String::from(
-        "| model | patches | load s | first frame s | frame p50 ms | CPU ms/frame | uploaded MB | converge frames | triangles (last) | scene B/patch | LOD B/patch (first → last) | RSS start MiB | RSS peak after load MiB | RSS peak MiB | (peak − start) B/patch |\n\
+        "| model | patches | load s | first frame s | frame p50 ms | CPU ms/frame | uploaded MB | converge frames | triangles (last) | scene B/patch | LOD B/patch (first → last) | RSS start MiB | RSS peak after load / first tessellation MiB | RSS peak MiB | (peak − start) B/patch |\n\
          |---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n",
     );
+    let mut failures = String::new();
     for p in points {
+        if let Some(f) = &p.failure {
+            failures.push_str(&format!(
+                "\n{}: stopped after the first tessellation: {f}\n",
+                p.model
+            ));
+        }
         let per = |b: f64| b / p.patches.max(1) as f64;
         let mib = |b: Option<u64>| b.map_or("—".to_owned(), |b| format!("{:.0}", b as f64 / MB));
-        let converge = match p.converge_frames {
+        // A point that stopped before drawing has no frame figures.
+        let drawn = |f: String| {
+            if p.failure.is_some() {
+                "—".to_owned()
+            } else {
+                f
+            }
+        };
+        let converge = drawn(match p.converge_frames {
             Some(c) => c.to_string(),
             None => format!("> {}", p.frames - p.jump_frame),
-        };
+        });
         s.push_str(&format!(
-            "| {} | {} | {:.2} | {:.2} | {:.1} | {} | {} | {} | {} | {:.0} | {:.0} → {:.0} | {} | {} | {} | {} |\n",
+            "| {} | {} | {:.2} | {} | {} | {} | {} | {} | {} | {:.0} | {:.0} → {:.0} | {} | {} | {} | {} |\n",
             p.model,
             p.patches,
             p.load_ms / 1e3,
-            p.first_frame_ms / 1e3,
-            p.frame_p50_ms,
+            drawn(format!("{:.2}", p.first_frame_ms / 1e3)),
+            drawn(format!("{:.1}", p.frame_p50_ms)),
             p.cpu_ms.map_or("—".to_owned(), |c| format!("{c:.1}")),
             p.uploaded_bytes
                 .map_or("—".to_owned(), |b| format!("{:.1}", b as f64 / MB)),
             converge,
-            p.triangles_last,
+            drawn(p.triangles_last.to_string()),
             per(p.scene_bytes as f64),
             per(p.lod_bytes_first as f64),
             per(p.lod_bytes_last as f64),
             mib(p.rss_start_bytes),
-            mib(p.rss_load_bytes),
+            format!("{} / {}", mib(p.rss_load_bytes), mib(p.rss_tessellate_bytes)),
             mib(p.peak_rss_bytes),
             match (p.peak_rss_bytes, p.rss_start_bytes) {
                 (Some(peak), Some(start)) => format!("{:.0}", per(peak.saturating_sub(start) as f64)),
@@ -143,7 +175,7 @@ pub fn markdown(points: &[ScalePoint]) -> String {
             },
         ));
     }
-    s
+    s + &failures
 }
 
 #[cfg(test)]
@@ -173,7 +205,9 @@ mod tests {
             lod_bytes_last: 70_000,
             rss_start_bytes: Some(16 << 20),
             rss_load_bytes: Some(40 << 20),
+            rss_tessellate_bytes: Some(50 << 20),
             peak_rss_bytes: Some(80 << 20),
+            failure: None,
         }
     }
 
@@ -186,12 +220,17 @@ mod tests {
             peak_rss_bytes: None,
             cpu_ms: Some(2.25),
             model: "a,b.step".into(),
+            failure: Some("Buffer size 3 is greater than 2, really".into()),
             ..p
         };
         let back = parse_row(&csv_row(&never)).expect("row");
         assert_eq!(back.model, "a_b.step");
         assert_eq!(back.converge_frames, None);
         assert_eq!(back.cpu_ms, Some(2.25));
+        assert_eq!(
+            back.failure.as_deref(),
+            Some("Buffer size 3 is greater than 2_ really")
+        );
         assert!(parse_row("x,1,2").is_err());
         let header_cells = CSV_HEADER.split(',').count();
         assert_eq!(csv_row(&never).split(',').count(), header_cells);
@@ -210,5 +249,11 @@ mod tests {
             ..point()
         }]);
         assert!(never.contains("| > 7 |"), "{never}");
+        let failed = markdown(&[ScalePoint {
+            failure: Some("too big".into()),
+            ..point()
+        }]);
+        assert!(failed.contains("| 1.50 | — | — |"), "{failed}");
+        assert!(failed.ends_with("teapots 2x2: stopped after the first tessellation: too big\n"));
     }
 }
