@@ -151,6 +151,11 @@ pub fn markdown(points: &[ScalePoint]) -> String {
             Some(c) => c.to_string(),
             None => format!("> {}", p.frames - p.jump_frame),
         });
+        let after_load = format!(
+            "{} / {}",
+            mib(p.rss_load_bytes),
+            mib(p.rss_tessellate_bytes)
+        );
         s.push_str(&format!(
             "| {} | {} | {:.2} | {} | {} | {} | {} | {} | {} | {:.0} | {:.0} → {:.0} | {} | {} | {} | {} |\n",
             p.model,
@@ -167,7 +172,7 @@ pub fn markdown(points: &[ScalePoint]) -> String {
             per(p.lod_bytes_first as f64),
             per(p.lod_bytes_last as f64),
             mib(p.rss_start_bytes),
-            format!("{} / {}", mib(p.rss_load_bytes), mib(p.rss_tessellate_bytes)),
+            after_load,
             mib(p.peak_rss_bytes),
             match (p.peak_rss_bytes, p.rss_start_bytes) {
                 (Some(peak), Some(start)) => format!("{:.0}", per(peak.saturating_sub(start) as f64)),
