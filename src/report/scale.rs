@@ -191,7 +191,7 @@ mod tests {
         ScalePoint {
             model: "teapots 2x2".into(),
             patches: 128,
-            load_ms: 1.5,
+            load_ms: 1500.0,
             first_frame_ms: 20.25,
             tessellate_ms: 3.0,
             upload_ms: 4.0,
