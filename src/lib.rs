@@ -24,7 +24,7 @@ pub mod render;
 pub mod report;
 pub mod strips;
 pub mod tessellate;
-mod util;
+pub mod util;
 pub mod view;
 #[cfg(feature = "viewer")]
 pub mod viewer;

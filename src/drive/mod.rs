@@ -4,3 +4,4 @@
 
 pub mod flythrough;
 pub mod implode;
+pub mod scale;

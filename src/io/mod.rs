@@ -178,6 +178,11 @@ pub enum Model {
 /// extension is [`LoadError::UnsupportedFormat`]. [`crate::prep::load`] turns it into a
 /// scene.
 pub fn read(path: &Path) -> Result<Model, LoadError> {
+    read_with(path, &crate::util::NoProgress)
+}
+
+/// As [`read`], reporting long steps (a STEP file's faces) to `progress`.
+pub fn read_with(path: &Path, progress: &dyn crate::util::Progress) -> Result<Model, LoadError> {
     let extension = path
         .extension()
         .map(|e| e.to_string_lossy().into_owned())
@@ -188,7 +193,10 @@ pub fn read(path: &Path) -> Result<Model, LoadError> {
             .map(|e| e.to_string_lossy().into_owned())
             .unwrap_or_default();
         if inner.eq_ignore_ascii_case("step") || inner.eq_ignore_ascii_case("stp") {
-            return Ok(Model::Step(Box::new(step::read(&read_gzip(path)?, path)?)));
+            let bytes = read_gzip(path)?;
+            return Ok(Model::Step(Box::new(step::read_with(
+                &bytes, path, progress,
+            )?)));
         }
         return Err(LoadError::UnsupportedFormat {
             path: path.to_path_buf(),
@@ -202,7 +210,9 @@ pub fn read(path: &Path) -> Result<Model, LoadError> {
             path: path.to_path_buf(),
             source,
         })?;
-        Ok(Model::Step(Box::new(step::read(&bytes, path)?)))
+        Ok(Model::Step(Box::new(step::read_with(
+            &bytes, path, progress,
+        )?)))
     } else if extension.eq_ignore_ascii_case("obj") {
         Ok(Model::Mesh(mesh::read_obj(path)?))
     } else if extension.eq_ignore_ascii_case("stl") {

@@ -175,6 +175,24 @@ pub struct UpdateStats {
     pub triangles: usize,
 }
 
+/// Bytes a [`FrameLoop`] holds (see [`FrameLoop::memory`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LodMemory {
+    /// The per-patch state structs (levels, errors, flags, cache lists, cut states' inline
+    /// part).
+    pub state: usize,
+    /// The current tessellations ([`PatchMesh::mem_bytes`] and the `Arc`'s counters).
+    pub current: usize,
+    /// The cached levels other than the current one.
+    pub cached: usize,
+}
+
+impl LodMemory {
+    pub fn total(&self) -> usize {
+        self.state + self.current + self.cached
+    }
+}
+
 /// The frame loop's state: every patch's current tessellation, error and visibility.
 #[derive(Debug)]
 pub struct FrameLoop {
@@ -275,6 +293,29 @@ impl FrameLoop {
         for (p, v) in self.patches.iter_mut().zip(visible) {
             p.visible = *v;
         }
+    }
+
+    /// Bytes held: per-patch state, current and cached tessellations (capacities, see
+    /// [`PatchMesh::mem_bytes`]; a mesh patch's cut state counted by its inline size only).
+    pub fn memory(&self) -> LodMemory {
+        use std::mem::size_of;
+        let arc = |m: &Arc<PatchMesh>| 2 * size_of::<usize>() + m.mem_bytes();
+        let mut mem = LodMemory {
+            state: self.patches.capacity() * size_of::<PatchLod>(),
+            ..LodMemory::default()
+        };
+        for p in &self.patches {
+            mem.state += p.cache.capacity() * size_of::<(i32, Arc<PatchMesh>)>();
+            mem.current += arc(&p.mesh);
+            mem.cached += p.cache.iter().map(|(_, m)| arc(m)).sum::<usize>();
+        }
+        mem
+    }
+
+    /// Number of patches whose tessellation is held (current, and cached levels).
+    pub fn tessellations(&self) -> (usize, usize) {
+        let cached = self.patches.iter().map(|p| p.cache.len()).sum();
+        (self.patches.len(), cached)
     }
 
     /// Changes whenever [`FrameLoop::meshes`] would give a different set of meshes.

@@ -4,6 +4,7 @@
 //! [`crate::tessellate::PatchMesh`] for a view, `render` draws those.
 
 pub mod bezier;
+pub mod memory;
 pub mod mesh;
 pub mod poles;
 pub mod trimmed;
@@ -11,6 +12,7 @@ pub mod trimmed;
 use std::sync::Arc;
 
 pub use bezier::{BezierPatch, MAX_DEGREE};
+pub use memory::SceneMemory;
 pub use trimmed::TrimmedFace;
 
 use glam::{DMat4, DVec3};

@@ -24,53 +24,8 @@ use crate::model::{Patch, PatchSurface, Scene, Sphere, UpAxis, bounding_box};
 /// Triangles per patch when a mesh is split into patches (the 1–2 k).
 pub const DEFAULT_PATCH_TRIANGLES: usize = 1500;
 
-/// Progress of long load steps, for whoever loads (called from worker threads).
-pub trait Progress: Sync {
-    /// A step named `what` of `total` units begins.
-    fn begin(&self, what: &str, total: usize);
-    /// One more unit is done.
-    fn advance(&self);
-    /// The step is over.
-    fn end(&self);
-}
-
-/// Reports nothing.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct NoProgress;
-
-impl Progress for NoProgress {
-    fn begin(&self, _: &str, _: usize) {}
-    fn advance(&self) {}
-    fn end(&self) {}
-}
-
-/// A step reported only when it has at least `min` units (short steps stay quiet); ends when
-/// dropped.
-struct Bar<'a>(Option<&'a dyn Progress>);
-
-impl<'a> Bar<'a> {
-    fn begin(progress: &'a dyn Progress, what: &str, total: usize, min: usize) -> Bar<'a> {
-        if total < min {
-            return Bar(None);
-        }
-        progress.begin(what, total);
-        Bar(Some(progress))
-    }
-
-    fn advance(&self) {
-        if let Some(p) = self.0 {
-            p.advance();
-        }
-    }
-}
-
-impl Drop for Bar<'_> {
-    fn drop(&mut self) {
-        if let Some(p) = self.0 {
-            p.end();
-        }
-    }
-}
+use crate::util::Bar;
+pub use crate::util::{NoProgress, Progress};
 
 /// Reads and prepares a model (see [`crate::io::read`] for the formats).
 pub fn load(path: &Path) -> Result<Scene, LoadError> {
@@ -79,7 +34,7 @@ pub fn load(path: &Path) -> Result<Scene, LoadError> {
 
 /// As [`load`], reporting long steps to `progress`.
 pub fn load_with(path: &Path, progress: &dyn Progress) -> Result<Scene, LoadError> {
-    prepare(crate::io::read(path)?, progress)
+    prepare(crate::io::read_with(path, progress)?, progress)
 }
 
 /// Prepares a model read by [`crate::io::read`].

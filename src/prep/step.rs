@@ -10,7 +10,6 @@ use std::sync::Arc;
 use glam::{DMat4, DVec3};
 use rayon::prelude::*;
 
-use super::{Bar, Progress};
 use crate::io::LoadError;
 use crate::io::step::StepModel;
 use crate::isolate::isolated;
@@ -19,6 +18,7 @@ use crate::model::{
     transform_scale, trimmed::TrimmedFace,
 };
 use crate::tessellate::{PatchMesh, TrimmedTessellator};
+use crate::util::{Bar, Progress};
 
 /// Coarse tolerance of the load-time tessellation, relative to a face's edge extent.
 const PROBE_TOLERANCE: f64 = 0.02;
@@ -42,7 +42,7 @@ pub fn assemble(model: StepModel, progress: &dyn Progress) -> Result<Scene, Load
         mut warnings,
     } = model;
     let p = || path.clone();
-    let pb = Bar::begin(progress, "faces", converted.len(), 200);
+    let pb = Bar::begin(progress, "faces probed", converted.len(), 200);
     let probed: Vec<(u64, Result<Probed, String>)> = converted
         .into_par_iter()
         .map_init(TrimmedTessellator::new, |t, (id, r)| {

@@ -69,6 +69,24 @@ impl PatchMesh {
     pub fn border_vertex_count(&self) -> usize {
         self.borders.iter().map(Vec::len).sum()
     }
+
+    /// Bytes this mesh holds: the struct and its arrays' capacities (positions, normals,
+    /// triangles, border loops, the failure message, a cut's ranges; the allocator's
+    /// per-allocation overhead and the hierarchy a cut refers to — the scene's — not counted).
+    pub fn mem_bytes(&self) -> usize {
+        use std::mem::size_of;
+        fn cap<T>(v: &Vec<T>) -> usize {
+            v.capacity() * size_of::<T>()
+        }
+        size_of::<PatchMesh>()
+            + cap(&self.positions)
+            + cap(&self.normals)
+            + cap(&self.triangles)
+            + cap(&self.borders)
+            + self.borders.iter().map(cap).sum::<usize>()
+            + self.failure.as_ref().map_or(0, String::capacity)
+            + self.arcs.as_ref().map_or(0, |a| cap(&a.ranges))
+    }
 }
 
 /// Both tessellators with their scratch buffers, one set per worker thread.
@@ -328,6 +346,8 @@ pub struct MeshStats {
     pub eps_max: f64,
     /// Largest measured error relative to its patch's target (≤ 1 when every patch holds).
     pub worst_error_ratio: f64,
+    /// Bytes the meshes hold ([`PatchMesh::mem_bytes`]).
+    pub bytes: usize,
 }
 
 impl MeshStats {
@@ -342,6 +362,7 @@ impl MeshStats {
             s.triangles += m.triangles.len();
             s.vertices += m.positions.len();
             s.border_vertices += m.border_vertex_count();
+            s.bytes += m.mem_bytes();
             s.eps_min = s.eps_min.min(m.eps_target);
             s.eps_max = s.eps_max.max(m.eps_target);
             if m.eps_target > 0.0 {

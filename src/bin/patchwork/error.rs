@@ -66,8 +66,16 @@ pub enum CliError {
     #[error("--up must not be parallel to the viewing direction")]
     UpAlongView { up: DVec3, direction: DVec3 },
     /// `bench` without a benchmark flag.
-    #[error("say which benchmark: --flythrough")]
+    #[error("say which benchmark: --flythrough or --scale")]
     NoBenchmark,
+    /// `bench --flythrough` needs exactly one model.
+    #[error("bench --flythrough takes one model file, got {0}")]
+    FlythroughFiles(usize),
+    #[error(transparent)]
+    Scale(#[from] patchwork::drive::scale::ScaleError),
+    /// A `bench --scale` point whose child process failed or answered nothing readable.
+    #[error("bench --scale: {point}: {reason}")]
+    ScalePoint { point: String, reason: String },
     #[cfg(feature = "viewer")]
     #[error("--keys: unknown key {key:?}")]
     UnknownKey { key: String },

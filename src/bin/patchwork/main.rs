@@ -33,8 +33,12 @@ enum Command {
     Check(cmd::check::CheckArgs),
     /// Write the tessellation as binary glTF (.glb): one mesh per part, one node per placement.
     Export(cmd::export::ExportArgs),
-    /// Benchmarks: `--flythrough` drives a recorded camera path through the LOD frame loop.
+    /// Benchmarks: `--flythrough` drives a recorded camera path through the LOD frame loop;
+    /// `--scale` sweeps teapot grids from 10³ to 10⁶ patches (and the files given).
     Bench(cmd::bench::BenchArgs),
+    /// One point of `bench --scale`, measured in this process (run by `bench --scale`).
+    #[command(hide = true)]
+    ScalePoint(cmd::bench::ScalePointArgs),
     /// Interactive viewer (needs a display; `xvfb-run -a` gives a virtual one).
     #[cfg(feature = "viewer")]
     View(cmd::view::ViewArgs),
@@ -51,6 +55,7 @@ fn main() -> ExitCode {
         Command::Check(a) => cmd::check::run(a),
         Command::Export(a) => cmd::export::run(a).map(|()| true),
         Command::Bench(a) => cmd::bench::run(a),
+        Command::ScalePoint(a) => cmd::bench::run_scale_point(a).map(|()| true),
         #[cfg(feature = "viewer")]
         Command::View(a) => cmd::view::run(a).map(|()| true),
         Command::Implode(a) => cmd::implode::run(a),

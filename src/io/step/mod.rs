@@ -13,6 +13,7 @@
 //! can panic runs under [`crate::isolate::isolated`]. Every face is tessellated once at load
 //! at a coarse tolerance: that gives its bounds and rejects faces that cannot be trimmed.
 
+mod chunks;
 pub mod p21;
 pub mod structure;
 
@@ -54,6 +55,19 @@ pub struct StepModel {
 
 /// Reads a STEP file from bytes (`path` is for messages): its structure and faces.
 pub fn read(bytes: &[u8], path: &Path) -> Result<StepModel, LoadError> {
+    read_with(bytes, path, &crate::util::NoProgress)
+}
+
+/// As [`read`], reporting the face conversion to `progress`. Faces are converted in parallel
+/// (rayon); the result is the same as one thread's, in file order: faces by shell (shells by
+/// entity id), each shell's faces as it lists them; every edge converted once, whichever face
+/// reaches it first (an edge's conversion depends on the edge alone); the loose-edge warning
+/// lists edges in the order one thread would have met them.
+pub fn read_with(
+    bytes: &[u8],
+    path: &Path,
+    progress: &dyn crate::util::Progress,
+) -> Result<StepModel, LoadError> {
     let p = || path.to_path_buf();
     if bytes.iter().all(u8::is_ascii_whitespace) {
         return Err(LoadError::Empty { path: p() });
@@ -83,27 +97,25 @@ pub fn read(bytes: &[u8], path: &Path) -> Result<StepModel, LoadError> {
         });
     }
 
-    // truck's view of the same data section.
-    let exchange =
-        truck_stepio::r#in::ruststep::parser::parse(&text).map_err(|e| LoadError::Unreadable {
-            path: p(),
-            reason: format!("STEP syntax not accepted by truck-stepio: {e}"),
-        })?;
+    // truck's view of the same data section (parsed in parallel, see `chunks`).
+    let instances = chunks::entity_instances(&text).map_err(|e| LoadError::Unreadable {
+        path: p(),
+        reason: format!("STEP syntax not accepted by truck-stepio: {e}"),
+    })?;
     let mut table = Table::default();
     let mut unreadable: BTreeMap<String, usize> = BTreeMap::new();
-    for section in &exchange.data {
-        for inst in &section.entities {
-            if table.push_instance(inst).is_err() {
-                let name = match inst {
-                    truck_stepio::r#in::ruststep::ast::EntityInstance::Simple {
-                        record, ..
-                    } => record.name.clone(),
-                    _ => "complex entity".to_owned(),
-                };
-                *unreadable.entry(name).or_default() += 1;
-            }
+    for inst in &instances {
+        if table.push_instance(inst).is_err() {
+            let name = match inst {
+                truck_stepio::r#in::ruststep::ast::EntityInstance::Simple { record, .. } => {
+                    record.name.clone()
+                }
+                _ => "complex entity".to_owned(),
+            };
+            *unreadable.entry(name).or_default() += 1;
         }
     }
+    drop(instances);
 
     complete_placements(&mut table);
     untrim_swept_curves(&mut table, &file);
@@ -142,9 +154,14 @@ pub fn read(bytes: &[u8], path: &Path) -> Result<StepModel, LoadError> {
         .map(|e| e.id)
         .collect();
     let mut face_ids: HashMap<u64, Vec<u64>> = HashMap::new();
-    let mut edges: HashMap<u64, Arc<TrimEdge>> = HashMap::new();
-    let mut converted: Vec<(u64, Result<TrimmedFace, String>)> = Vec::new();
-    let mut loose: Vec<u64> = Vec::new();
+    // Every face of every shell, in order (a face listed by two shells is converted twice,
+    // as each shell's).
+    let mut jobs: Vec<u64> = Vec::new();
+    for &shell in &shells {
+        let ids = shell_faces(&file, shell);
+        jobs.extend_from_slice(&ids);
+        face_ids.insert(shell, ids);
+    }
     let source = FaceSource {
         file: &file,
         table: &table,
@@ -152,16 +169,34 @@ pub fn read(bytes: &[u8], path: &Path) -> Result<StepModel, LoadError> {
         angle_rad: structure.plane_angle_rad,
         uncertainty: structure.uncertainty,
     };
-    for &shell in &shells {
-        let ids = shell_faces(&file, shell);
-        for &f in &ids {
-            let r = isolated(|| convert_face(&source, f, &mut edges, &mut loose))
-                .and_then(|r| r)
-                .map_err(|e| e.to_string());
-            converted.push((f, r));
-        }
-        face_ids.insert(shell, ids);
-    }
+    let edges = EdgeCache::default();
+    let results: Vec<(Result<TrimmedFace, String>, Vec<u64>)> = {
+        use rayon::prelude::*;
+        let bar = crate::util::Bar::begin(progress, "faces read", jobs.len(), 200);
+        jobs.par_iter()
+            .map(|&f| {
+                // The edges the face reached, kept even when its conversion panics.
+                let mut reached = Vec::new();
+                let r = isolated(|| convert_face(&source, f, &edges, &mut reached))
+                    .and_then(|r| r)
+                    .map_err(|e| e.to_string());
+                bar.advance();
+                (r, reached)
+            })
+            .collect()
+    };
+    // Loose edges in the order one thread converting the faces in order would have met them.
+    let mut seen = std::collections::HashSet::new();
+    let loose: Vec<u64> = results
+        .iter()
+        .flat_map(|(_, reached)| reached.iter().copied())
+        .filter(|&e| seen.insert(e) && edges.is_loose(e))
+        .collect();
+    let converted: Vec<(u64, Result<TrimmedFace, String>)> = jobs
+        .into_iter()
+        .zip(results)
+        .map(|(f, (r, _))| (f, r))
+        .collect();
 
     if !loose.is_empty() {
         let list: Vec<String> = loose.iter().take(5).map(|e| format!("#{e}")).collect();
@@ -272,6 +307,31 @@ fn shell_faces(file: &p21::P21File, shell: u64) -> Vec<u64> {
         .unwrap_or_default()
 }
 
+/// An edge converted, and whether its vertices were accepted only within the loose tolerance;
+/// or why it cannot be used.
+type EdgeResult = Result<(Arc<TrimEdge>, bool), String>;
+
+/// Edges shared by the faces converted in parallel: each converted once, by the first face to
+/// reach it (the others wait for it). A conversion that panicked leaves no result: the next
+/// face to reach the edge tries again, as one thread would.
+#[derive(Default)]
+struct EdgeCache(std::sync::Mutex<HashMap<u64, Arc<std::sync::OnceLock<EdgeResult>>>>);
+
+impl EdgeCache {
+    fn cell(&self, id: u64) -> Arc<std::sync::OnceLock<EdgeResult>> {
+        let mut map = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        map.entry(id).or_default().clone()
+    }
+
+    fn get(&self, id: u64, convert: impl FnOnce() -> EdgeResult) -> EdgeResult {
+        self.cell(id).get_or_init(convert).clone()
+    }
+
+    fn is_loose(&self, id: u64) -> bool {
+        matches!(self.cell(id).get(), Some(Ok((_, true))))
+    }
+}
+
 fn entity_ref<T: Clone>(p: &PlaceHolder<T>, table: &HashMap<u64, T>) -> Option<(u64, T)> {
     match p {
         PlaceHolder::Ref(Name::Entity(id)) => table.get(id).cloned().map(|t| (*id, t)),
@@ -293,11 +353,12 @@ struct FaceSource<'a> {
     uncertainty: Option<f64>,
 }
 
+/// Converts face `id`; `reached` gets every edge curve the face looks up, in order.
 fn convert_face(
     src: &FaceSource<'_>,
     id: u64,
-    edges: &mut HashMap<u64, Arc<TrimEdge>>,
-    loose: &mut Vec<u64>,
+    edges: &EdgeCache,
+    reached: &mut Vec<u64>,
 ) -> Result<TrimmedFace, String> {
     let FaceSource {
         file,
@@ -363,19 +424,15 @@ fn convert_face(
             } else {
                 (*eid, true)
             };
-            let edge = match edges.get(&ecid) {
-                Some(e) => e.clone(),
-                None => {
-                    let holder: &EdgeCurveHolder = table
-                        .edge_curve
-                        .get(&ecid)
-                        .ok_or_else(|| format!("edge #{ecid} is not a readable EDGE_CURVE"))?;
-                    let e = convert_edge(file, table, ecid, holder, uncertainty, loose)?;
-                    let e = Arc::new(e);
-                    edges.insert(ecid, e.clone());
-                    e
-                }
-            };
+            reached.push(ecid);
+            let (edge, _) = edges.get(ecid, || {
+                let holder: &EdgeCurveHolder = table
+                    .edge_curve
+                    .get(&ecid)
+                    .ok_or_else(|| format!("edge #{ecid} is not a readable EDGE_CURVE"))?;
+                let (e, loose) = convert_edge(file, table, ecid, holder, uncertainty)?;
+                Ok((Arc::new(e), loose))
+            })?;
             out.push(LoopEdge { edge, forward });
         }
         if !bound.orientation {
@@ -486,8 +543,7 @@ fn convert_edge(
     id: u64,
     holder: &EdgeCurveHolder,
     uncertainty: Option<f64>,
-    loose: &mut Vec<u64>,
-) -> Result<TrimEdge, String> {
+) -> Result<(TrimEdge, bool), String> {
     let ec = holder
         .clone()
         .into_owned(table)
@@ -526,18 +582,12 @@ fn convert_edge(
         if let Some(curve) = exact.clone()
             && let Some(e) = TrimEdge::new(id, curve, start, end, t)
         {
-            if t > tol {
-                loose.push(id);
-            }
-            return Ok(e);
+            return Ok((e, t > tol));
         }
         if let Ok(curve) = truck_curve.clone()
             && let Some(e) = TrimEdge::new(id, curve, start, end, t)
         {
-            if t > tol {
-                loose.push(id);
-            }
-            return Ok(e);
+            return Ok((e, t > tol));
         }
     }
     truck_curve?;

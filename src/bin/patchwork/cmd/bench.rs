@@ -1,15 +1,25 @@
 //! `patchwork bench --flythrough`: the recorded camera path through the LOD frame loop; a CSV,
 //! a plot and the summary. Exit code 1 when a frame had crack pixels.
+//!
+//! `patchwork bench --scale [FILE...]`: teapot grids from 10³ to 10⁶ patches and the files
+//! given, each point measured by `drive::scale::run_point` in a child process of this binary
+//! (the hidden `scale-point` command), so each point's resident peak is its own; a Markdown
+//! table, and a CSV with `--csv`. Exit code 1 when a point failed.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
 
 use clap::Args;
 
 use patchwork::drive::flythrough::{FlythroughOptions, run as run_flythrough};
+use patchwork::drive::scale::{
+    DEFAULT_GRID_SIZES, ScaleOptions, ScalePoint, Source, run_point, sizes_within,
+};
 use patchwork::io::png;
 use patchwork::lod::LodOptions;
 use patchwork::render::Renderer;
 use patchwork::report::flythrough::{TargetSummary, frames_csv, plot};
+use patchwork::report::scale as scale_report;
 use patchwork::strips::Join;
 use patchwork::view;
 
@@ -21,14 +31,27 @@ use crate::error::CliError;
 
 #[derive(Args, Debug)]
 pub struct BenchArgs {
-    /// Model file (.bpt, .step, .stp, .glb, .gltf, .obj, .ply).
-    file: PathBuf,
+    /// Model file (.bpt, .step, .stp, .glb, .gltf, .obj, .ply): one for `--flythrough`, any
+    /// number (after the grids) for `--scale`.
+    files: Vec<PathBuf>,
     /// Run the fly-through: orbit, zoom in close, a sudden jump, then still.
     #[arg(long)]
     flythrough: bool,
-    /// Frames of the camera path.
-    #[arg(long, default_value_t = 200)]
-    frames: usize,
+    /// Run the scale sweep: N×N teapot grids (`--sizes`), then the files given.
+    #[arg(long, conflicts_with = "flythrough")]
+    scale: bool,
+    /// `--scale`: grid sizes N (32·N² patches each).
+    #[arg(long, value_delimiter = ',', default_values_t = DEFAULT_GRID_SIZES)]
+    sizes: Vec<usize>,
+    /// `--scale`: leave out grids of more patches than this.
+    #[arg(long, default_value_t = 2_000_000)]
+    max_patches: usize,
+    /// `--scale`: only the files, no teapot grids.
+    #[arg(long)]
+    no_grids: bool,
+    /// Frames of the camera path (default 200 for `--flythrough`, 20 for `--scale`).
+    #[arg(long)]
+    frames: Option<usize>,
     #[command(flatten)]
     budget: BudgetArgs,
     /// Frame-rate target mode: choose the pixel error per frame to fit this frame time (ms).
@@ -61,9 +84,10 @@ pub struct BenchArgs {
     #[arg(long)]
     strip_joins: Option<Join>,
 
-    /// Per-frame CSV.
-    #[arg(long, default_value = "flythrough.csv")]
-    csv: PathBuf,
+    /// Per-frame CSV (`--flythrough`, default flythrough.csv); the table as CSV (`--scale`,
+    /// only when given).
+    #[arg(long)]
+    csv: Option<PathBuf>,
     /// Plot of error and frame time over the frames.
     #[arg(long, default_value = "flythrough.png")]
     plot: PathBuf,
@@ -74,20 +98,27 @@ fn mib(bytes: f64) -> String {
     format!("{:.2} MiB ({bytes:.0} bytes)", bytes / (1024.0 * 1024.0))
 }
 
-/// Whether every measured frame was crack-free.
+/// Whether every measured frame was crack-free (`--flythrough`) or every point was measured
+/// (`--scale`).
 pub fn run(args: &BenchArgs) -> Result<bool, CliError> {
+    if args.scale {
+        return run_scale(args);
+    }
     if !args.flythrough {
         return Err(CliError::NoBenchmark);
     }
+    let [file] = args.files.as_slice() else {
+        return Err(CliError::FlythroughFiles(args.files.len()));
+    };
     let fov_y = fov_y(args.fov)?;
     let pixel_error = pixel_error(args.pixel_error)?;
-    let frames = at_least("--frames", args.frames, 2)?;
+    let frames = at_least("--frames", args.frames.unwrap_or(200), 2)?;
     let budget = args.budget.validate()?;
     let target = args
         .target_ms
         .map(|t| positive_ms("--target-ms", t))
         .transpose()?;
-    let scene = load(&args.file)?;
+    let scene = load(file)?;
     let mut renderer = Renderer::new()?;
     renderer.static_arcs = !args.upload_cuts;
     renderer.primitives = args.primitives.primitives;
@@ -109,14 +140,18 @@ pub fn run(args: &BenchArgs) -> Result<bool, CliError> {
     let pb = progress(frames, "frames");
     let (records, summary) = run_flythrough(&mut renderer, &scene, &opts, |_| pb.inc(1))?;
     pb.finish_and_clear();
-    png::write_text(&args.csv, &frames_csv(&records))?;
+    let csv = args
+        .csv
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("flythrough.csv"));
+    png::write_text(&csv, &frames_csv(&records))?;
     png::write_rgba(
         &args.plot,
         &plot(&records, args.budget.budget_ms, summary.jump_frame),
     )?;
     println!(
         "fly-through of {} ({} patches), {} frames at {}x{}, budget {} ms, pixel error {}{}",
-        args.file.display(),
+        file.display(),
         scene.patches.len(),
         records.len(),
         args.size.0,
@@ -179,6 +214,152 @@ pub fn run(args: &BenchArgs) -> Result<bool, CliError> {
     if let (Some(max), Some(total)) = (summary.max_crack_pixels, summary.total_crack_pixels) {
         println!("crack pixels              {total} in all, at most {max} in a frame");
     }
-    println!("wrote {} and {}", args.csv.display(), args.plot.display());
+    println!("wrote {} and {}", csv.display(), args.plot.display());
     Ok(crack_free)
+}
+
+/// `--scale`: every point in a child process (`scale-point`), then the table.
+fn run_scale(args: &BenchArgs) -> Result<bool, CliError> {
+    fov_y(args.fov)?;
+    pixel_error(args.pixel_error)?;
+    args.budget.validate()?;
+    let frames = at_least("--frames", args.frames.unwrap_or(20), 2)?;
+    let mut sources: Vec<Source> = Vec::new();
+    if !args.no_grids {
+        sources.extend(
+            sizes_within(&args.sizes, args.max_patches)
+                .into_iter()
+                .map(Source::Grid),
+        );
+    }
+    sources.extend(args.files.iter().cloned().map(Source::File));
+    let exe = std::env::current_exe().map_err(|source| CliError::Io {
+        path: PathBuf::from("patchwork"),
+        source,
+    })?;
+    let work_dir = std::env::temp_dir().join(format!("patchwork-scale-{}", std::process::id()));
+    std::fs::create_dir_all(&work_dir).map_err(|source| CliError::CreateDir {
+        path: work_dir.clone(),
+        source,
+    })?;
+    let pb = progress(sources.len(), "points");
+    pb.enable_steady_tick(std::time::Duration::from_millis(500));
+    let mut points = Vec::new();
+    let mut failed = 0;
+    for source in &sources {
+        pb.set_message(source.label());
+        let point = measure_in_child(&exe, source, args, frames, &work_dir);
+        pb.inc(1);
+        match point {
+            Ok(p) => {
+                pb.suspend(|| eprintln!("{}", scale_report::csv_row(&p)));
+                points.push(p);
+            }
+            Err(e) => {
+                pb.suspend(|| eprintln!("error: {e}"));
+                failed += 1;
+            }
+        }
+    }
+    pb.finish_and_clear();
+    let _ = std::fs::remove_dir_all(&work_dir);
+    println!(
+        "scale sweep: {frames} frames per point at {}x{}, pixel error {}, budget {} ms; each point in its own process",
+        args.size.0, args.size.1, args.pixel_error, args.budget.budget_ms
+    );
+    print!("{}", scale_report::markdown(&points));
+    if let Some(csv) = &args.csv {
+        png::write_text(csv, &scale_report::csv(&points))?;
+        println!("wrote {}", csv.display());
+    }
+    Ok(failed == 0)
+}
+
+/// Runs `scale-point` for `source` in a child process and reads its row back.
+fn measure_in_child(
+    exe: &Path,
+    source: &Source,
+    args: &BenchArgs,
+    frames: usize,
+    work_dir: &Path,
+) -> Result<ScalePoint, CliError> {
+    let mut cmd = Command::new(exe);
+    cmd.arg("scale-point");
+    match source {
+        Source::Grid(n) => cmd.arg("--grid").arg(n.to_string()),
+        Source::File(f) => cmd.arg("--file").arg(f),
+    };
+    cmd.arg("--frames")
+        .arg(frames.to_string())
+        .arg("--pixel-error")
+        .arg(args.pixel_error.to_string())
+        .arg("--size")
+        .arg(format!("{}x{}", args.size.0, args.size.1))
+        .arg("--fov")
+        .arg(args.fov.to_string())
+        .arg("--budget-ms")
+        .arg(args.budget.budget_ms.to_string())
+        .arg("--work-dir")
+        .arg(work_dir)
+        .stdin(Stdio::null())
+        .stderr(Stdio::inherit());
+    let failed = |reason: String| CliError::ScalePoint {
+        point: source.label(),
+        reason,
+    };
+    let out = cmd
+        .output()
+        .map_err(|e| failed(format!("cannot start {}: {e}", exe.display())))?;
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let row = stdout
+        .lines()
+        .find_map(|l| l.strip_prefix(POINT_PREFIX))
+        .ok_or_else(|| failed(format!("the child process gave no row ({})", out.status)))?;
+    scale_report::parse_row(row).map_err(failed)
+}
+
+/// The line a `scale-point` child answers on.
+const POINT_PREFIX: &str = "scale-point: ";
+
+/// The hidden `scale-point` command: one point of `bench --scale`, measured in this process.
+#[derive(Args, Debug)]
+pub struct ScalePointArgs {
+    /// An N×N teapot grid ...
+    #[arg(long, conflicts_with = "file", required_unless_present = "file")]
+    grid: Option<usize>,
+    /// ... or a model file.
+    #[arg(long)]
+    file: Option<PathBuf>,
+    #[arg(long, default_value_t = 20)]
+    frames: usize,
+    #[arg(long, default_value_t = view::DEFAULT_PIXEL_ERROR)]
+    pixel_error: f64,
+    #[arg(long, default_value = "1024x768", value_parser = parse_size)]
+    size: (u32, u32),
+    #[arg(long, default_value_t = view::DEFAULT_FOV_Y_DEG)]
+    fov: f64,
+    #[command(flatten)]
+    budget: BudgetArgs,
+    /// Where a grid's file is written.
+    #[arg(long, default_value = ".")]
+    work_dir: PathBuf,
+}
+
+/// Measures the point and prints its row on stdout (after [`POINT_PREFIX`]).
+pub fn run_scale_point(args: &ScalePointArgs) -> Result<(), CliError> {
+    let source = match (&args.file, args.grid) {
+        (Some(f), _) => Source::File(f.clone()),
+        (None, n) => Source::Grid(at_least("--grid", n.unwrap_or(0), 1)?),
+    };
+    let opts = ScaleOptions {
+        frames: at_least("--frames", args.frames, 2)?,
+        size: args.size,
+        fov_y: fov_y(args.fov)?,
+        lod: lod_options(pixel_error(args.pixel_error)?, args.budget.validate()?),
+        work_dir: args.work_dir.clone(),
+    };
+    let mut renderer = Renderer::new()?;
+    let run = run_point(&mut renderer, &source, &opts, |_| {})?;
+    println!("{POINT_PREFIX}{}", scale_report::csv_row(&run.point));
+    Ok(())
 }

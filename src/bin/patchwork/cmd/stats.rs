@@ -29,7 +29,9 @@ pub struct StatsArgs {
 }
 
 pub fn run(args: &StatsArgs) -> Result<(), CliError> {
+    let t_load = Instant::now();
     let scene = load(&args.file)?;
+    let load_ms = t_load.elapsed().as_secs_f64() * 1e3;
     let camera = args.camera.validate()?;
     let view = camera.view(&scene)?;
     // Warm-up run (thread pool start), then the timed one.
@@ -39,6 +41,7 @@ pub fn run(args: &StatsArgs) -> Result<(), CliError> {
     let dt = t0.elapsed();
     let s = MeshStats::of(&meshes);
     println!("file              {}", args.file.display());
+    println!("load              {load_ms:.0} ms");
     println!("patches           {}", s.patches);
     println!("triangles         {}", s.triangles);
     println!("vertices          {}", s.vertices);
@@ -99,10 +102,41 @@ pub fn run(args: &StatsArgs) -> Result<(), CliError> {
         "eye               {:.3},{:.3},{:.3}",
         view.eye.x, view.eye.y, view.eye.z
     );
+    print_memory(&scene, &s);
     if args.parts {
         print_parts(&scene, &meshes);
     }
     Ok(())
+}
+
+/// Memory: the scene's and the tessellation's own accounting (capacities; see
+/// `model::memory` and `PatchMesh::mem_bytes` for what is counted), per patch and per
+/// triangle, and the process's resident peak.
+fn print_memory(scene: &Scene, meshes: &MeshStats) {
+    let m = scene.memory();
+    let per = |b: usize, n: usize| b as f64 / n.max(1) as f64;
+    let mib = |b: usize| b as f64 / (1024.0 * 1024.0);
+    println!(
+        "scene memory      {:.1} MiB: {:.0} B/patch (patch structs {:.0}, surfaces {:.0}, other {:.0})",
+        mib(m.total()),
+        per(m.total(), scene.patches.len()),
+        per(m.patches, scene.patches.len()),
+        per(m.surfaces, scene.patches.len()),
+        per(m.other, scene.patches.len())
+    );
+    println!(
+        "mesh memory       {:.1} MiB: {:.0} B/patch, {:.1} B/triangle (this view's tessellation)",
+        mib(meshes.bytes),
+        per(meshes.bytes, meshes.patches),
+        per(meshes.bytes, meshes.triangles)
+    );
+    match patchwork::util::peak_rss_bytes() {
+        Some(peak) => println!(
+            "peak RSS          {:.1} MiB (the whole process so far: load, two tessellations, the fidelity check)",
+            mib(peak as usize)
+        ),
+        None => println!("peak RSS          (not known on this system)"),
+    }
 }
 
 /// The placed solids / shells: index, part, occurrence path, shell, translation, world box
