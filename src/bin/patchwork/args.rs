@@ -5,6 +5,7 @@
 //! `validate`-style functions here into typed values, called where the command first needs
 //! them (after the model is loaded for the camera, so a missing file is reported first).
 
+use std::path::PathBuf;
 use std::time::Duration;
 
 use clap::Args;
@@ -12,6 +13,7 @@ use glam::DVec3;
 
 use patchwork::lod::LodOptions;
 use patchwork::model::Scene;
+use patchwork::prep::{Hierarchies, LoadOptions};
 use patchwork::render::{FatBorders, Primitives, RenderOptions, Shading};
 use patchwork::view::{self, View};
 
@@ -268,5 +270,30 @@ impl DrawArgs {
             depth: false,
             ..RenderOptions::default()
         }
+    }
+}
+
+/// The MT hierarchy cache of mesh models.
+#[derive(Args, Clone, Copy, Debug)]
+pub struct CacheArgs {
+    /// Neither read nor write the mesh hierarchy cache (in $PATCHWORK_CACHE, else
+    /// $XDG_CACHE_HOME/patchwork or ~/.cache/patchwork; PATCHWORK_CACHE=off also turns it off).
+    #[arg(long)]
+    pub no_cache: bool,
+}
+
+impl CacheArgs {
+    /// The cache directory, unless turned off.
+    pub fn dir(&self) -> Option<PathBuf> {
+        if self.no_cache {
+            None
+        } else {
+            patchwork::io::mt_cache::default_dir()
+        }
+    }
+
+    /// Load options with this cache and `hierarchies`.
+    pub fn options(&self, hierarchies: Hierarchies) -> LoadOptions {
+        LoadOptions::new(hierarchies, self.dir())
     }
 }

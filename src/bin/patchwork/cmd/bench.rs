@@ -12,7 +12,7 @@ use patchwork::report::flythrough::{TargetSummary, frames_csv, plot};
 use patchwork::strips::Join;
 use patchwork::view;
 
-use super::{load, progress};
+use super::{load_built, progress};
 use crate::args::{
     BudgetArgs, PrimitivesArg, at_least, fov_y, lod_options, parse_size, pixel_error, positive_ms,
 };
@@ -22,6 +22,8 @@ use crate::error::CliError;
 pub struct BenchArgs {
     /// Model file (.bpt, .step, .stp, .glb, .gltf, .obj, .ply).
     file: PathBuf,
+    #[command(flatten)]
+    cache: crate::args::CacheArgs,
     /// Run the fly-through: orbit, zoom in close, a sudden jump, then still.
     #[arg(long)]
     flythrough: bool,
@@ -77,7 +79,7 @@ pub fn run(args: &BenchArgs) -> Result<bool, CliError> {
         .target_ms
         .map(|t| positive_ms("--target-ms", t))
         .transpose()?;
-    let scene = load(&args.file)?;
+    let scene = load_built(&args.file, &args.cache)?;
     let mut renderer = Renderer::new()?;
     renderer.static_arcs = !args.upload_cuts;
     renderer.primitives = args.primitives.primitives;

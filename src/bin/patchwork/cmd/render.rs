@@ -18,6 +18,8 @@ use crate::error::CliError;
 pub struct RenderArgs {
     /// Model file (.bpt, .step, .stp, .glb, .gltf, .obj, .ply).
     file: PathBuf,
+    #[command(flatten)]
+    cache: crate::args::CacheArgs,
     /// Output PNG.
     #[arg(short, long)]
     output: PathBuf,
@@ -31,7 +33,22 @@ pub struct RenderArgs {
 }
 
 pub fn run(args: &RenderArgs) -> Result<(), CliError> {
-    let scene = load(&args.file)?;
+    // A mesh is drawn from its cached hierarchies, or else at full resolution (error 0):
+    // building them would take longer than the image (`stats`, `check`, `bench` and `view`
+    // fill the cache).
+    let loaded = load(
+        &args.file,
+        &args
+            .cache
+            .options(patchwork::prep::Hierarchies::CachedOrOriginal),
+    )?;
+    if loaded.pending.is_some() {
+        eprintln!(
+            "{}: no cached hierarchies: drawn at full resolution",
+            args.file.display()
+        );
+    }
+    let scene = loaded.scene;
     let camera = args.camera.validate()?;
     let view = camera.view(&scene)?;
     let t0 = Instant::now();
