@@ -1,5 +1,6 @@
 //! Build and reduction time of the bunny's patch hierarchies, one thread and on rayon:
-//! `cargo run --release --example mt_build [model]` (default `models/bunny.glb`).
+//! `cargo run --release --example mt_build [model] [--one]` (default `models/bunny.glb`;
+//! `--one`: one thread only).
 
 use std::time::Instant;
 
@@ -8,8 +9,12 @@ use patchwork::mt::{DEFAULT_ARC_SIZE, MtHierarchy};
 use rayon::prelude::*;
 
 fn main() {
-    let path = std::env::args()
-        .nth(1)
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let one_thread_only = args.iter().any(|a| a == "--one");
+    let path = args
+        .iter()
+        .find(|a| !a.starts_with("--"))
+        .cloned()
         .unwrap_or_else(|| concat!(env!("CARGO_MANIFEST_DIR"), "/models/bunny.glb").to_string());
     let patchwork::io::Model::Mesh(mut mesh) =
         patchwork::io::read(std::path::Path::new(&path)).expect("the model loads")
@@ -43,19 +48,22 @@ fn main() {
         })
         .sum();
     let reduce = t.elapsed().as_secs_f64();
+    println!(
+        "{path}: {n} triangles, {} patches, {nodes} nodes after reduction\n\
+         one thread: build {build:.3} s, reduce {reduce:.3} s ({:.0} k triangles/s)",
+        parts.len(),
+        n as f64 / (build + reduce) / 1e3,
+    );
+    if one_thread_only {
+        return;
+    }
     let t = Instant::now();
     let mut par = parts.clone();
     par.par_iter_mut()
         .for_each(|p| p.build_hierarchy(DEFAULT_ARC_SIZE));
     let both = t.elapsed().as_secs_f64();
     println!(
-        "{path}: {n} triangles, {} patches, {nodes} nodes after reduction\n\
-         one thread: build {:.3} s, reduce {:.3} s ({:.0} k triangles/s)\n\
-         rayon ({} threads): build + reduce {:.3} s ({:.0} k triangles/s)",
-        parts.len(),
-        build,
-        reduce,
-        n as f64 / (build + reduce) / 1e3,
+        "rayon ({} threads): build + reduce {:.3} s ({:.0} k triangles/s)",
         rayon::current_num_threads(),
         both,
         n as f64 / both / 1e3

@@ -1,7 +1,7 @@
-//! Small helpers shared by several stages: integer-keyed hash maps and sets, and a 128-bit
+//! Small helpers shared by several stages: integer-keyed hash maps, and a 128-bit
 //! content hash (cache keys and checksums).
 
-use std::collections::{HashMap, HashSet};
+use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 
 /// A multiply-and-rotate hasher for the small integer keys of the arc-collapse maps (the
@@ -27,7 +27,6 @@ impl Hasher for IntHasher {
 }
 
 pub(crate) type IntMap<K, V> = HashMap<K, V, BuildHasherDefault<IntHasher>>;
-pub(crate) type IntSet<K> = HashSet<K, BuildHasherDefault<IntHasher>>;
 
 /// A 128-bit hash of `bytes` (two independent 64-bit lanes over little-endian words, each
 /// finished by MurmurHash3's `fmix64`; the length is hashed too). Not cryptographic: it tells

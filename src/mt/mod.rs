@@ -255,6 +255,34 @@ mod fixtures {
         worst
     }
 
+    /// Two-sided Hausdorff distance between two triangle sets over `pos`, measured densely:
+    /// every triangle sampled on a barycentric grid of `k` steps per edge ((k+1)(k+2)/2
+    /// points), independent of the 7 samples the build uses.
+    pub(super) fn dense_hausdorff(pos: &[DVec3], x: &[[u32; 3]], y: &[[u32; 3]], k: u32) -> f64 {
+        let dist_to = |p: DVec3, tris: &[[u32; 3]]| {
+            tris.iter()
+                .map(|t| {
+                    let [a, b, c] = t.map(|i| pos[i as usize]);
+                    point_triangle_distance(p, a, b, c)
+                })
+                .fold(f64::INFINITY, f64::min)
+        };
+        let mut worst = 0.0f64;
+        for (from, to) in [(x, y), (y, x)] {
+            for t in from {
+                let [a, b, c] = t.map(|i| pos[i as usize]);
+                for i in 0..=k {
+                    for j in 0..=k - i {
+                        let (u, v) = (i as f64 / k as f64, j as f64 / k as f64);
+                        let p = a + (b - a) * u + (c - a) * v;
+                        worst = worst.max(dist_to(p, to));
+                    }
+                }
+            }
+        }
+        worst
+    }
+
     pub(super) fn edges_used(tris: &[[u32; 3]]) -> HashMap<(u32, u32), u32> {
         let mut uses = HashMap::new();
         for t in tris {
