@@ -101,6 +101,7 @@ struct Builder {
     /// Scratch lists reused by every collapse.
     scratch_vertices: Vec<u32>,
     scratch_edges: Vec<(u32, u32)>,
+    fan_edges: Vec<(u32, u32)>,
 }
 
 impl Builder {
@@ -161,6 +162,7 @@ impl Builder {
             generation: 0,
             scratch_vertices: Vec::new(),
             scratch_edges: Vec::new(),
+            fan_edges: Vec::new(),
         }
     }
 
@@ -449,10 +451,25 @@ impl Builder {
                 }
             }
         }
+        // Fan → region; corners and edges the fan triangles share are sampled once.
+        let g = self.next_generation();
+        let mut edges = std::mem::take(&mut self.fan_edges);
+        edges.clear();
         for &t in fan {
-            let [a, b, c] = self.tris[t as usize].map(|i| self.pos[i as usize]);
+            let tri = self.tris[t as usize];
+            let [a, b, c] = tri.map(|i| self.pos[i as usize]);
+            let mut todo = [true; 7];
+            for k in 0..3 {
+                todo[k] = self.mark[tri[k] as usize] != g;
+                self.mark[tri[k] as usize] = g;
+                let e = (tri[k].min(tri[(k + 1) % 3]), tri[k].max(tri[(k + 1) % 3]));
+                todo[3 + k] = !edges.contains(&e);
+                if todo[3 + k] {
+                    edges.push(e);
+                }
+            }
             let own = &self.covers[t as usize];
-            for s in samples(a, b, c) {
+            for (s, _) in samples(a, b, c).into_iter().zip(todo).filter(|x| x.1) {
                 let mut best = f64::INFINITY;
                 for &o in own.iter().chain(region) {
                     best = best.min(self.dist(s, o));
@@ -465,6 +482,7 @@ impl Builder {
                 }
             }
         }
+        self.fan_edges = edges;
         worst
     }
 }
