@@ -343,6 +343,8 @@ fn a_mesh_is_shown_at_once_and_its_hierarchies_swapped_in() {
             .arg("view")
             .arg(&model)
             .args(["--size", "320x240", "--frames", "40"])
+            .arg("--screenshot")
+            .arg(dir.join("last.png"))
             .env("DISPLAY", &display.name)
             .env("PATCHWORK_CACHE", &cache)
             .env_remove("WAYLAND_DISPLAY")
