@@ -232,7 +232,8 @@ pub fn lod_options(pixel_error: f64, budget: Duration) -> LodOptions {
 #[derive(Args, Debug, Clone, Copy)]
 pub struct PrimitivesArg {
     /// Surface primitives: `auto` (lists for tessellated patches, multiresolution strips for
-    /// mesh patches: fastest measured), `list` (indexed triangles), `strips` (static triangle
+    /// mesh patches: fastest measured over many frames; lists for `render`'s one image),
+    /// `list` (indexed triangles), `strips` (static triangle
     /// strips by tunneling; per arc for mesh patches), `mts` (mesh patches: multiresolution
     /// strips at each cut) or `repair` (mesh patches: strips repaired by tunneling as the cut
     /// moves).
