@@ -310,3 +310,61 @@ fn without_a_display_the_viewer_says_what_to_do() {
     let stderr = String::from_utf8_lossy(&result.stderr);
     assert!(stderr.contains("xvfb"), "{stderr}");
 }
+
+/// A mesh is shown at once at full resolution; its hierarchies, built on a background thread,
+/// replace it while the viewer runs and land in the cache, from which the next run reads them.
+#[test]
+fn a_mesh_is_shown_at_once_and_its_hierarchies_swapped_in() {
+    let display = Display::open();
+    let dir = common::scratch("viewer").join("mesh-swap");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("scratch dir");
+    // A bumpy 40 × 40 grid, 3 200 triangles.
+    let n = 40u32;
+    let mut obj = String::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            let (x, y) = (i as f32 * 0.1, j as f32 * 0.1);
+            obj += &format!("v {x} {y} {}\n", 0.2 * (3.0 * x).sin() * (2.0 * y).cos());
+        }
+    }
+    let at = |i: u32, j: u32| j * (n + 1) + i + 1;
+    for j in 0..n {
+        for i in 0..n {
+            obj += &format!("f {} {} {}\n", at(i, j), at(i + 1, j), at(i + 1, j + 1));
+            obj += &format!("f {} {} {}\n", at(i, j), at(i + 1, j + 1), at(i, j + 1));
+        }
+    }
+    let model = dir.join("grid.obj");
+    std::fs::write(&model, obj).expect("writes the model");
+    let cache = dir.join("cache");
+    let run = || {
+        let o = Command::new(env!("CARGO_BIN_EXE_patchwork"))
+            .arg("view")
+            .arg(&model)
+            .args(["--size", "320x240", "--frames", "40"])
+            .arg("--screenshot")
+            .arg(dir.join("last.png"))
+            .env("DISPLAY", &display.name)
+            .env("PATCHWORK_CACHE", &cache)
+            .env_remove("WAYLAND_DISPLAY")
+            .output()
+            .expect("patchwork runs");
+        let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert!(o.status.success(), "viewer failed: {stderr}");
+        stderr
+    };
+    let first = run();
+    assert!(first.contains("hierarchies built"), "{first}");
+    assert!(
+        first.contains("hierarchies ready"),
+        "never swapped: {first}"
+    );
+    let files = std::fs::read_dir(&cache).map_or(0, |d| d.count());
+    assert_eq!(files, 1, "cache not written");
+    let second = run();
+    assert!(
+        !second.contains("hierarchies built") && !second.contains("hierarchies ready"),
+        "the cache was not used: {second}"
+    );
+}

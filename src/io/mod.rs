@@ -18,6 +18,7 @@ pub mod bpt;
 pub mod depth;
 pub mod gltf_out;
 pub mod mesh;
+pub mod mt_cache;
 pub mod png;
 pub mod step;
 pub mod stl;

@@ -64,6 +64,16 @@ pub fn write_text(path: &Path, text: &str) -> Result<(), WriteError> {
     })
 }
 
+/// Writes bytes (a cache file) atomically, like the images.
+pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<(), WriteError> {
+    write_atomic(path, |tmp| {
+        std::fs::write(tmp, bytes).map_err(|source| WriteError::Io {
+            path: path.to_owned(),
+            source,
+        })
+    })
+}
+
 fn encode_err(path: &Path, e: image::ImageError) -> WriteError {
     match e {
         image::ImageError::IoError(source) => WriteError::Io {

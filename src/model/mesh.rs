@@ -12,6 +12,8 @@ use std::collections::HashMap;
 
 use glam::Vec3;
 
+use crate::util::IntMap;
+
 /// An indexed triangle mesh in world coordinates.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct TriMesh {
@@ -105,7 +107,7 @@ pub fn vertex_normals(mesh: &TriMesh) -> Vec<Vec3> {
 /// The patch made of `triangles` of `mesh`: local vertices with their `normals` (one per mesh
 /// vertex, e.g. [`vertex_normals`]) and border loops.
 pub fn extract(mesh: &TriMesh, normals: &[Vec3], triangles: &[u32]) -> MeshPatch {
-    let mut local: HashMap<u32, u32> = HashMap::new();
+    let mut local: IntMap<u32, u32> = IntMap::default();
     let mut positions = Vec::new();
     let mut sources = Vec::new();
     let mut tris = Vec::with_capacity(triangles.len());
@@ -138,14 +140,14 @@ pub fn extract(mesh: &TriMesh, normals: &[Vec3], triangles: &[u32]) -> MeshPatch
 /// Closed loops of the edges used by exactly one triangle, walked in the triangles' winding.
 /// At a vertex where several border loops meet, each outgoing edge is used once.
 pub fn border_loops(triangles: &[[u32; 3]]) -> Vec<Vec<u32>> {
-    let mut uses: HashMap<(u32, u32), u32> = HashMap::new();
+    let mut uses: IntMap<(u32, u32), u32> = IntMap::default();
     for t in triangles {
         for k in 0..3 {
             *uses.entry(edge(t[k], t[(k + 1) % 3])).or_default() += 1;
         }
     }
     // Directed border edges a → b, by start vertex.
-    let mut next: HashMap<u32, Vec<u32>> = HashMap::new();
+    let mut next: IntMap<u32, Vec<u32>> = IntMap::default();
     let mut starts = Vec::new();
     for t in triangles {
         for k in 0..3 {

@@ -99,6 +99,110 @@ impl MtHierarchy {
     }
 }
 
+/// The stored fields of a hierarchy, everything else ([`MtHierarchy::order`], the arcs) being
+/// derived from them: what a cache of built hierarchies (`io::mt_cache`) writes and reads.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MtParts {
+    pub triangles: Vec<[u32; 3]>,
+    pub created_by: Vec<u32>,
+    pub removed_by: Vec<u32>,
+    pub node_error: Vec<f64>,
+    pub vertex_removed_by: Vec<u32>,
+    pub vertex_target: Vec<u32>,
+}
+
+impl MtHierarchy {
+    /// The hierarchy without a single collapse: every cut is `triangles`, with error 0. What a
+    /// mesh patch carries until its real hierarchy is built (the full-resolution mesh is
+    /// within every ε), made in linear time.
+    pub fn original(triangles: &[[u32; 3]], vertex_count: usize) -> MtHierarchy {
+        let mut h = MtHierarchy {
+            triangles: triangles.to_vec(),
+            created_by: vec![0; triangles.len()],
+            removed_by: vec![NEVER; triangles.len()],
+            node_error: vec![0.0],
+            vertex_removed_by: vec![NEVER; vertex_count],
+            vertex_target: (0..vertex_count as u32).collect(),
+            ..Default::default()
+        };
+        h.layout();
+        h
+    }
+
+    /// Whether the hierarchy has no collapse (every cut is the original mesh): the one of
+    /// [`MtHierarchy::original`], or a built one of a patch where nothing could collapse.
+    pub fn is_original(&self) -> bool {
+        self.node_error.len() <= 1
+    }
+
+    /// The stored fields (see [`MtParts`]).
+    pub fn parts(&self) -> MtParts {
+        MtParts {
+            triangles: self.triangles.clone(),
+            created_by: self.created_by.clone(),
+            removed_by: self.removed_by.clone(),
+            node_error: self.node_error.clone(),
+            vertex_removed_by: self.vertex_removed_by.clone(),
+            vertex_target: self.vertex_target.clone(),
+        }
+    }
+
+    /// The hierarchy of stored fields for a patch of `vertex_count` vertices, after checking
+    /// every invariant the cut algorithms rely on (lengths, index bounds, creators before
+    /// removers, finite non-negative errors with node 0 at 0, errors monotone along every
+    /// arc); the reason otherwise. Untrusted input (a cache file) cannot make it panic.
+    pub fn from_parts(p: MtParts, vertex_count: usize) -> Result<MtHierarchy, String> {
+        let (m, nodes) = (p.triangles.len(), p.node_error.len());
+        if p.created_by.len() != m || p.removed_by.len() != m {
+            return Err("creator / remover lists do not match the triangles".into());
+        }
+        if p.vertex_removed_by.len() != vertex_count || p.vertex_target.len() != vertex_count {
+            return Err("vertex lists do not match the patch's vertices".into());
+        }
+        if nodes == 0 || p.node_error[0] != 0.0 {
+            return Err("node 0 (the original mesh) missing or with an error".into());
+        }
+        if let Some(e) = p.node_error.iter().find(|e| !e.is_finite() || **e < 0.0) {
+            return Err(format!(
+                "node error {e} is not a finite non-negative number"
+            ));
+        }
+        if p.triangles
+            .iter()
+            .flatten()
+            .any(|&v| v as usize >= vertex_count)
+        {
+            return Err("a triangle's vertex is out of range".into());
+        }
+        for (&c, &r) in p.created_by.iter().zip(&p.removed_by) {
+            if c as usize >= nodes || (r != NEVER && (r as usize >= nodes || r <= c)) {
+                return Err(format!(
+                    "arc ({c}, {r}) out of range or against the node order"
+                ));
+            }
+            if r != NEVER && p.node_error[c as usize] > p.node_error[r as usize] {
+                return Err(format!("errors not monotone along arc ({c}, {r})"));
+            }
+        }
+        for (&n, &t) in p.vertex_removed_by.iter().zip(&p.vertex_target) {
+            if (n != NEVER && n as usize >= nodes) || t as usize >= vertex_count {
+                return Err("a vertex's remover or target is out of range".into());
+            }
+        }
+        let mut h = MtHierarchy {
+            triangles: p.triangles,
+            created_by: p.created_by,
+            removed_by: p.removed_by,
+            node_error: p.node_error,
+            vertex_removed_by: p.vertex_removed_by,
+            vertex_target: p.vertex_target,
+            ..Default::default()
+        };
+        h.layout();
+        Ok(h)
+    }
+}
+
 /// Meshes and measures shared by the tests of the hierarchy's modules.
 #[cfg(test)]
 mod fixtures {
@@ -145,6 +249,34 @@ mod fixtures {
                 let [a, b, c] = t.map(|i| pos[i as usize]);
                 for s in samples(a, b, c) {
                     worst = worst.max(dist_to(s, to));
+                }
+            }
+        }
+        worst
+    }
+
+    /// Two-sided Hausdorff distance between two triangle sets over `pos`, measured densely:
+    /// every triangle sampled on a barycentric grid of `k` steps per edge ((k+1)(k+2)/2
+    /// points), independent of the 7 samples the build uses.
+    pub(super) fn dense_hausdorff(pos: &[DVec3], x: &[[u32; 3]], y: &[[u32; 3]], k: u32) -> f64 {
+        let dist_to = |p: DVec3, tris: &[[u32; 3]]| {
+            tris.iter()
+                .map(|t| {
+                    let [a, b, c] = t.map(|i| pos[i as usize]);
+                    point_triangle_distance(p, a, b, c)
+                })
+                .fold(f64::INFINITY, f64::min)
+        };
+        let mut worst = 0.0f64;
+        for (from, to) in [(x, y), (y, x)] {
+            for t in from {
+                let [a, b, c] = t.map(|i| pos[i as usize]);
+                for i in 0..=k {
+                    for j in 0..=k - i {
+                        let (u, v) = (i as f64 / k as f64, j as f64 / k as f64);
+                        let p = a + (b - a) * u + (c - a) * v;
+                        worst = worst.max(dist_to(p, to));
+                    }
                 }
             }
         }

@@ -8,7 +8,7 @@ use std::cmp::Ordering;
 use std::collections::{BinaryHeap, HashMap};
 
 use super::{MtHierarchy, NEVER};
-use crate::util::{IntMap, IntSet};
+use crate::util::IntMap;
 
 impl MtHierarchy {
     /// Reduces the hierarchy by arc collapses (Holst, section 4.1) until arcs hold `target`
@@ -34,6 +34,47 @@ impl MtHierarchy {
     }
 }
 
+/// Whether a triangle of `a` shares a vertex with a triangle of `b` (triangles of `h`):
+/// `a`'s vertices marked with a fresh generation in `marks` (one per vertex), `b`'s looked up.
+fn touch(h: &MtHierarchy, a: &[u32], b: &[u32], marks: &mut Marks) -> bool {
+    let g = marks.fresh();
+    for &t in a {
+        for v in h.triangles[t as usize] {
+            marks.mark[v as usize] = g;
+        }
+    }
+    b.iter().any(|&t| {
+        h.triangles[t as usize]
+            .iter()
+            .any(|&v| marks.mark[v as usize] == g)
+    })
+}
+
+/// Marks with generations: `mark[x] == generation` means marked, so clearing is free.
+#[derive(Default)]
+struct Marks {
+    mark: Vec<u32>,
+    generation: u32,
+}
+
+impl Marks {
+    fn new(n: usize) -> Marks {
+        Marks {
+            mark: vec![0; n],
+            generation: 0,
+        }
+    }
+
+    fn fresh(&mut self) -> u32 {
+        if self.generation == u32::MAX {
+            self.mark.fill(0);
+            self.generation = 0;
+        }
+        self.generation += 1;
+        self.generation
+    }
+}
+
 /// Arc-collapse state: nodes merged by union-find, arcs as triangle lists.
 struct Reducer {
     parent: Vec<u32>,
@@ -45,6 +86,11 @@ struct Reducer {
     mu: f64,
     /// Triangles in all arcs, and the number of arcs (for the mean arc size).
     arc_triangles: usize,
+    /// Depth-first search scratch: nodes seen and the stack.
+    seen: Marks,
+    stack: Vec<u32>,
+    /// Vertices of an arc, for the touching test.
+    vertices: Marks,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -94,6 +140,9 @@ impl Reducer {
             succ,
             pred,
             version: vec![0; n],
+            seen: Marks::new(n),
+            stack: Vec::new(),
+            vertices: Marks::new(h.vertex_target.len()),
             mu: if min_nonzero.is_finite() {
                 min_nonzero / 10.0
             } else {
@@ -116,28 +165,30 @@ impl Reducer {
     }
 
     /// Whether a path other than the arc itself joins `c` to `r`.
-    fn other_path(&self, c: u32, r: u32) -> bool {
-        let mut stack: Vec<u32> = self.succ[c as usize]
-            .iter()
-            .copied()
-            .filter(|&x| x != r)
-            .collect();
-        let mut seen = IntSet::default();
+    fn other_path(&mut self, c: u32, r: u32) -> bool {
+        let mut stack = std::mem::take(&mut self.stack);
+        stack.clear();
+        stack.extend(self.succ[c as usize].iter().copied().filter(|&x| x != r));
+        let g = self.seen.fresh();
+        let mut found = false;
         while let Some(x) = stack.pop() {
             if x == r {
-                return true;
+                found = true;
+                break;
             }
             // (Merged nodes break creation order, so no pruning by index.)
-            if !seen.insert(x) {
+            if self.seen.mark[x as usize] == g {
                 continue;
             }
+            self.seen.mark[x as usize] = g;
             stack.extend(self.succ[x as usize].iter().copied());
         }
-        false
+        self.stack = stack;
+        found
     }
 
     /// The paper's weight of collapsing arc (c, r) (small first), `None` if not allowed.
-    fn weight(&self, h: &MtHierarchy, (c, r): (u32, u32)) -> Option<f64> {
+    fn weight(&mut self, h: &MtHierarchy, (c, r): (u32, u32)) -> Option<f64> {
         if !self.collapsible((c, r)) {
             return None;
         }
@@ -145,47 +196,42 @@ impl Reducer {
         let e = |n: u32| h.node_error[n as usize].max(self.mu);
         let e_diff = e(r) / e(c);
         // Arc pairs that merge: common predecessors and common successors of c and r.
-        let mut pairs: Vec<(&Vec<u32>, &Vec<u32>)> = Vec::new();
+        let (mut pairs, mut ps, mut touching) = (0usize, 0usize, 0usize);
+        let mut marks = std::mem::take(&mut self.vertices);
+        let mut pair = |a: &[u32], b: &[u32]| {
+            pairs += 1;
+            ps += a.len() + b.len();
+            if touch(h, a, b, &mut marks) {
+                touching += 1;
+            }
+        };
         for &x in self.pred[c as usize].intersection(&self.pred[r as usize]) {
             if let (Some(a), Some(b)) = (self.arcs.get(&(x, c)), self.arcs.get(&(x, r))) {
-                pairs.push((a, b));
+                pair(a, b);
             }
         }
-        let succ_c: Vec<u32> = self.succ[c as usize]
-            .iter()
-            .copied()
-            .chain([NEVER])
-            .collect();
-        for y in succ_c {
+        for y in self.succ[c as usize].iter().copied().chain([NEVER]) {
             if y == r {
                 continue;
             }
             if let (Some(a), Some(b)) = (self.arcs.get(&(c, y)), self.arcs.get(&(r, y))) {
-                pairs.push((a, b));
+                pair(a, b);
             }
         }
-        if pairs.is_empty() {
+        self.vertices = marks;
+        if pairs == 0 {
             // Nothing merges: the collapse would not enlarge any arc.
             return None;
         }
-        let ps: usize = pairs.iter().map(|(a, b)| a.len() + b.len()).sum();
-        let ps_rel = ps as f64 / pairs.len() as f64;
-        let touching = pairs
-            .iter()
-            .filter(|(a, b)| {
-                let verts: IntSet<u32> = a.iter().flat_map(|&t| h.triangles[t as usize]).collect();
-                b.iter()
-                    .any(|&t| h.triangles[t as usize].iter().any(|v| verts.contains(v)))
-            })
-            .count();
+        let ps_rel = ps as f64 / pairs as f64;
         if touching == 0 {
             return None;
         }
-        let adj = touching as f64 / pairs.len() as f64;
+        let adj = touching as f64 / pairs as f64;
         Some(size * e_diff * ps_rel / adj)
     }
 
-    fn push(&self, h: &MtHierarchy, arc: (u32, u32), heap: &mut BinaryHeap<ArcCandidate>) {
+    fn push(&mut self, h: &MtHierarchy, arc: (u32, u32), heap: &mut BinaryHeap<ArcCandidate>) {
         if let Some(weight) = self.weight(h, arc) {
             heap.push(ArcCandidate {
                 weight,

@@ -9,17 +9,18 @@
 pub mod partition;
 pub mod step;
 
-use std::path::Path;
-
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use glam::DMat4;
 
 pub use partition::partition;
 
+use crate::io::mt_cache::{self, CacheKey};
 use crate::io::{LoadError, Model};
-use crate::model::mesh::TriMesh;
+use crate::model::mesh::{MeshPatch, TriMesh};
 use crate::model::{Patch, PatchSurface, Scene, Sphere, UpAxis, bounding_box};
+use crate::mt::MtHierarchy;
 
 /// Triangles per patch when a mesh is split into patches (the 1–2 k).
 pub const DEFAULT_PATCH_TRIANGLES: usize = 1500;
@@ -27,7 +28,103 @@ pub const DEFAULT_PATCH_TRIANGLES: usize = 1500;
 use crate::util::Bar;
 pub use crate::util::{NoProgress, Progress};
 
-/// Reads and prepares a model (see [`crate::io::read`] for the formats).
+/// When the MT hierarchies of a mesh's patches are built.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Hierarchies {
+    /// Now, while loading (read from the cache when it holds them, written to it otherwise).
+    #[default]
+    Build,
+    /// Read from the cache when it holds them; otherwise every patch gets the hierarchy
+    /// without collapses ([`crate::mt::MtHierarchy::original`]: its cut is the full-resolution
+    /// mesh, error 0, within every ε), made at once, and [`Loaded::pending`] says how to
+    /// build the real ones later ([`PendingHierarchies::build`]).
+    CachedOrOriginal,
+}
+
+/// How [`load_with_options`] prepares a model.
+#[non_exhaustive]
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LoadOptions {
+    pub hierarchies: Hierarchies,
+    /// Directory of the hierarchy cache ([`crate::io::mt_cache`]); `None`: no cache.
+    pub cache: Option<PathBuf>,
+}
+
+impl LoadOptions {
+    pub fn new(hierarchies: Hierarchies, cache: Option<PathBuf>) -> LoadOptions {
+        LoadOptions { hierarchies, cache }
+    }
+}
+
+/// A prepared scene and what is left to do for it.
+#[derive(Debug)]
+pub struct Loaded {
+    pub scene: Scene,
+    /// The mesh patches still carry hierarchies without collapses: build them with this.
+    pub pending: Option<PendingHierarchies>,
+    /// About the cache (refused, unreadable or unwritable files): nothing is lost, the
+    /// hierarchies were built instead.
+    pub warnings: Vec<String>,
+}
+
+/// How to build the MT hierarchies a scene loaded with [`Hierarchies::CachedOrOriginal`] left
+/// out, and where to store them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PendingHierarchies {
+    arc_size: f64,
+    cache: Option<(PathBuf, CacheKey)>,
+}
+
+/// A scene with every mesh patch's hierarchy built, and warnings about the cache.
+#[derive(Debug)]
+pub struct Built {
+    pub scene: Scene,
+    pub warnings: Vec<String>,
+}
+
+impl PendingHierarchies {
+    /// A copy of `scene` in which every mesh patch has its real hierarchy (built on rayon,
+    /// reported to `progress`), written to the cache when there is one. `scene` itself is
+    /// not touched: a viewer keeps drawing it meanwhile and swaps in the result.
+    pub fn build(&self, scene: &Scene, progress: &dyn Progress) -> Built {
+        use rayon::prelude::*;
+        let mut scene = scene.clone();
+        let mesh_patches = scene
+            .patches
+            .iter()
+            .filter(|p| matches!(p.surface, PatchSurface::Mesh(_)))
+            .count();
+        {
+            let bar = Bar::begin(progress, "patch hierarchies", mesh_patches, 20);
+            scene.patches.par_iter_mut().for_each(|p| {
+                if let PatchSurface::Mesh(m) = &p.surface {
+                    let mut m = MeshPatch::clone(m);
+                    m.build_hierarchy(self.arc_size);
+                    p.surface = PatchSurface::Mesh(Arc::new(m));
+                    bar.advance();
+                }
+            });
+        }
+        let mut warnings = Vec::new();
+        if let Some((dir, key)) = &self.cache {
+            let hs: Vec<&MtHierarchy> = mesh_hierarchies(&scene).collect();
+            if let Err(e) = mt_cache::write(dir, *key, &hs) {
+                warnings.push(e.to_string());
+            }
+        }
+        Built { scene, warnings }
+    }
+}
+
+fn mesh_hierarchies(scene: &Scene) -> impl Iterator<Item = &MtHierarchy> {
+    scene.patches.iter().filter_map(|p| match &p.surface {
+        PatchSurface::Mesh(m) => Some(&m.hierarchy),
+        _ => None,
+    })
+}
+
+/// Reads and prepares a model (see [`crate::io::read`] for the formats), building every
+/// hierarchy, without a cache.
 pub fn load(path: &Path) -> Result<Scene, LoadError> {
     load_with(path, &NoProgress)
 }
@@ -37,7 +134,7 @@ pub fn load_with(path: &Path, progress: &dyn Progress) -> Result<Scene, LoadErro
     prepare(crate::io::read_with(path, progress)?, progress)
 }
 
-/// Prepares a model read by [`crate::io::read`].
+/// Prepares a model read by [`crate::io::read`], building every hierarchy (no cache).
 pub fn prepare(model: Model, progress: &dyn Progress) -> Result<Scene, LoadError> {
     Ok(match model {
         Model::Bezier(patches) => Scene::from_bezier(patches, UpAxis::Z),
@@ -52,16 +149,130 @@ pub fn prepare(model: Model, progress: &dyn Progress) -> Result<Scene, LoadError
     })
 }
 
+/// Reads and prepares a model as `options` say: a mesh's hierarchies from the cache, built
+/// now, or left for later ([`Hierarchies`]).
+pub fn load_with_options(
+    path: &Path,
+    options: &LoadOptions,
+    progress: &dyn Progress,
+) -> Result<Loaded, LoadError> {
+    let model = crate::io::read(path)?;
+    let Model::Mesh(mesh) = model else {
+        let scene = prepare(model, progress)?;
+        return Ok(Loaded {
+            scene,
+            pending: None,
+            warnings: Vec::new(),
+        });
+    };
+    let mut warnings = Vec::new();
+    let (patch_triangles, arc_size) = (DEFAULT_PATCH_TRIANGLES, crate::mt::DEFAULT_ARC_SIZE);
+    let cache = options.cache.as_ref().and_then(|dir| {
+        match std::fs::read(path) {
+            Ok(bytes) => {
+                let key = CacheKey::new(&bytes, &[patch_triangles as u64, arc_size.to_bits()]);
+                Some((dir.clone(), key))
+            }
+            Err(e) => {
+                // The model was just read; should it vanish now, go on without a cache.
+                warnings.push(format!("{}: not cached: {e}", path.display()));
+                None
+            }
+        }
+    });
+    let (parts, bbox, weld_warnings) = mesh_parts(mesh, patch_triangles);
+    let counts: Vec<usize> = parts.iter().map(|p| p.positions.len()).collect();
+    let cached = cache
+        .as_ref()
+        .and_then(|(dir, key)| match mt_cache::read(dir, *key, &counts) {
+            Ok(Some(hs)) if hs.iter().zip(&parts).all(|(h, p)| same_originals(h, p)) => Some(hs),
+            Ok(Some(_)) => {
+                warnings.push(format!(
+                    "{}: hierarchy cache refused: it does not match the patches; rebuilt",
+                    dir.join(key.file_name()).display()
+                ));
+                None
+            }
+            Ok(None) => None,
+            Err(e) => {
+                warnings.push(format!("{e}; rebuilt"));
+                None
+            }
+        });
+    let pending = PendingHierarchies { arc_size, cache };
+    let (parts, pending) = match (cached, options.hierarchies) {
+        (Some(hs), _) => {
+            let parts = parts
+                .into_iter()
+                .zip(hs)
+                .map(|(p, hierarchy)| MeshPatch { hierarchy, ..p })
+                .collect();
+            (parts, None)
+        }
+        (None, Hierarchies::Build) => {
+            let parts = build_hierarchies(parts, arc_size, progress);
+            if let Some((dir, key)) = &pending.cache {
+                let hs: Vec<&MtHierarchy> = parts.iter().map(|p| &p.hierarchy).collect();
+                if let Err(e) = mt_cache::write(dir, *key, &hs) {
+                    warnings.push(e.to_string());
+                }
+            }
+            (parts, None)
+        }
+        (None, Hierarchies::CachedOrOriginal) => {
+            let parts = parts
+                .into_iter()
+                .map(|p| MeshPatch {
+                    hierarchy: MtHierarchy::original(&p.triangles, p.positions.len()),
+                    ..p
+                })
+                .collect();
+            (parts, Some(pending))
+        }
+    };
+    Ok(Loaded {
+        scene: scene_of(parts, UpAxis::Y, bbox, weld_warnings),
+        pending,
+        warnings,
+    })
+}
+
+/// Whether `h` is a hierarchy of patch `p`: its original triangles (created by node 0) are
+/// the patch's.
+fn same_originals(h: &MtHierarchy, p: &MeshPatch) -> bool {
+    let mut a: Vec<[u32; 3]> = h
+        .triangles
+        .iter()
+        .zip(&h.created_by)
+        .filter(|&(_, &c)| c == 0)
+        .map(|(t, _)| *t)
+        .collect();
+    let mut b = p.triangles.clone();
+    a.sort_unstable();
+    b.sort_unstable();
+    a == b
+}
+
 /// Builds a scene from a triangle mesh: welded, split into patches of about
 /// `patch_triangles` triangles ([`partition`]), each with its MT hierarchy reduced
 /// to `arc_size` triangles per arc (built on rayon, reported to `progress`).
 pub fn mesh_scene(
-    mut m: TriMesh,
+    m: TriMesh,
     patch_triangles: usize,
     arc_size: f64,
     up: UpAxis,
     progress: &dyn Progress,
 ) -> Scene {
+    let (parts, bbox, warnings) = mesh_parts(m, patch_triangles);
+    let parts = build_hierarchies(parts, arc_size, progress);
+    scene_of(parts, up, bbox, warnings)
+}
+
+/// The welded mesh's patches (hierarchies not built), its bounding box and warnings.
+fn mesh_parts(
+    mut m: TriMesh,
+    patch_triangles: usize,
+) -> (Vec<MeshPatch>, (glam::DVec3, glam::DVec3), Vec<String>) {
     let dropped = m.weld();
     let mut warnings = Vec::new();
     if dropped > 0 {
@@ -70,15 +281,30 @@ pub fn mesh_scene(
         ));
     }
     let bbox = bounding_box(m.positions.iter().map(|p| p.as_dvec3())).unwrap_or_default();
-    let mut parts = partition(&m, patch_triangles);
-    {
-        use rayon::prelude::*;
-        let bar = Bar::begin(progress, "patch hierarchies", parts.len(), 20);
-        parts.par_iter_mut().for_each(|p| {
-            p.build_hierarchy(arc_size);
-            bar.advance();
-        });
-    }
+    (partition(&m, patch_triangles), bbox, warnings)
+}
+
+/// Every patch's hierarchy built and reduced to `arc_size`, on rayon.
+fn build_hierarchies(
+    mut parts: Vec<MeshPatch>,
+    arc_size: f64,
+    progress: &dyn Progress,
+) -> Vec<MeshPatch> {
+    use rayon::prelude::*;
+    let bar = Bar::begin(progress, "patch hierarchies", parts.len(), 20);
+    parts.par_iter_mut().for_each(|p| {
+        p.build_hierarchy(arc_size);
+        bar.advance();
+    });
+    parts
+}
+
+fn scene_of(
+    parts: Vec<MeshPatch>,
+    up: UpAxis,
+    bbox: (glam::DVec3, glam::DVec3),
+    warnings: Vec<String>,
+) -> Scene {
     let patches: Vec<Patch> = parts
         .into_iter()
         .enumerate()

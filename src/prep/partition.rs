@@ -7,33 +7,75 @@ use std::collections::HashMap;
 use crate::model::mesh::{MeshPatch, TriMesh, edge, extract, vertex_normals};
 
 /// For every triangle, the triangles sharing each of its edges (non-manifold edges: all of
-/// them; boundary edges: none).
-fn adjacency(mesh: &TriMesh) -> Vec<Vec<u32>> {
-    let mut by_edge: HashMap<(u32, u32), Vec<u32>> =
-        HashMap::with_capacity(mesh.triangles.len() * 2);
+/// them; boundary edges: none), sorted, as compressed rows: triangle `t`'s neighbours are
+/// `list[start[t]..start[t + 1]]`. Built by grouping the (edge, triangle) pairs — no hash map,
+/// no allocation per edge or triangle: counting sorts (the hash-map version took 0.4 s on
+/// the bunny, mostly cache misses).
+struct Adjacency {
+    start: Vec<u32>,
+    list: Vec<u32>,
+}
+
+impl Adjacency {
+    fn of(&self, t: u32) -> &[u32] {
+        &self.list[self.start[t as usize] as usize..self.start[t as usize + 1] as usize]
+    }
+}
+
+/// Compressed rows of `items` grouped by `key(item) < groups` (a counting sort, stable).
+fn rows<T: Copy>(groups: usize, items: &[T], key: impl Fn(&T) -> usize) -> (Vec<u32>, Vec<T>) {
+    let mut start = vec![0u32; groups + 1];
+    for x in items {
+        start[key(x) + 1] += 1;
+    }
+    for g in 0..groups {
+        start[g + 1] += start[g];
+    }
+    let mut fill = start.clone();
+    let mut out = items.to_vec();
+    for x in items {
+        let k = key(x);
+        out[fill[k] as usize] = *x;
+        fill[k] += 1;
+    }
+    (start, out)
+}
+
+fn adjacency(mesh: &TriMesh) -> Adjacency {
+    let n = mesh.triangles.len();
+    let vertices = mesh.positions.len();
+    // (smaller vertex, larger vertex, triangle) of every edge, grouped by the smaller vertex,
+    // then each group sorted: equal edges are adjacent.
+    let mut edges: Vec<(u32, u32, u32)> = Vec::with_capacity(3 * n);
     for (t, tri) in mesh.triangles.iter().enumerate() {
         for k in 0..3 {
-            by_edge
-                .entry(edge(tri[k], tri[(k + 1) % 3]))
-                .or_default()
-                .push(t as u32);
+            let (a, b) = edge(tri[k], tri[(k + 1) % 3]);
+            edges.push((a, b, t as u32));
         }
     }
-    let mut adj = vec![Vec::with_capacity(3); mesh.triangles.len()];
-    for list in by_edge.values() {
-        for &a in list {
-            for &b in list {
-                if a != b {
-                    adj[a as usize].push(b);
+    let (start, mut edges) = rows(vertices, &edges, |e| e.0 as usize);
+    let mut pairs: Vec<(u32, u32)> = Vec::with_capacity(3 * n);
+    for v in 0..vertices {
+        let group = &mut edges[start[v] as usize..start[v + 1] as usize];
+        group.sort_unstable();
+        for same in group.chunk_by(|x, y| x.1 == y.1) {
+            for &(_, _, a) in same {
+                for &(_, _, b) in same {
+                    if a != b {
+                        pairs.push((a, b));
+                    }
                 }
             }
         }
     }
-    // Hash-map order differs between runs: sort, so partitions are reproducible.
-    for list in adj.iter_mut() {
-        list.sort_unstable();
+    let (start, mut pairs) = rows(n, &pairs, |p| p.0 as usize);
+    for t in 0..n {
+        pairs[start[t] as usize..start[t + 1] as usize].sort_unstable();
     }
-    adj
+    Adjacency {
+        start,
+        list: pairs.into_iter().map(|(_, b)| b).collect(),
+    }
 }
 
 /// Splits `mesh` into patches of about `target` triangles (≥ 1). Every triangle lands in
@@ -60,7 +102,7 @@ pub fn partition(mesh: &TriMesh, target: usize) -> Vec<MeshPatch> {
             if size >= target {
                 break;
             }
-            for &u in &adj[t as usize] {
+            for &u in adj.of(t) {
                 if label[u as usize] == u32::MAX && size + queue.len() < target {
                     label[u as usize] = id;
                     queue.push_back(u);
@@ -90,7 +132,7 @@ pub fn partition(mesh: &TriMesh, target: usize) -> Vec<MeshPatch> {
         let root = find(&merged, id);
         let mut counts: HashMap<u32, usize> = HashMap::new();
         for &t in &by_label[id as usize] {
-            for &u in &adj[t as usize] {
+            for &u in adj.of(t) {
                 let other = find(&merged, label[u as usize]);
                 if other != root {
                     *counts.entry(other).or_default() += 1;

@@ -152,7 +152,19 @@ pub struct ViewerReport {
 pub use crate::frame::heat_color;
 
 /// Opens the window and runs until it is closed (or the scripted frames are drawn).
-pub fn run(mut scene: Scene, options: ViewerOptions) -> Result<ViewerReport, ViewerError> {
+pub fn run(scene: Scene, options: ViewerOptions) -> Result<ViewerReport, ViewerError> {
+    run_upgrading(scene, options, None)
+}
+
+/// As [`run`], and when `upgrade` delivers a scene (the same patches, e.g. with the MT
+/// hierarchies a background thread built: `prep::PendingHierarchies::build`), draws that one
+/// from then on: a new [`FrameState`] over it, camera and pixel error kept. Both scenes stay
+/// immutable; the swap happens between frames.
+pub fn run_upgrading(
+    mut scene: Scene,
+    options: ViewerOptions,
+    upgrade: Option<std::sync::mpsc::Receiver<Scene>>,
+) -> Result<ViewerReport, ViewerError> {
     let event_loop = EventLoop::new().map_err(|e| ViewerError::NoDisplay(e.to_string()))?;
     let playing = options.implode.map(|a| {
         let explosion = crate::anim::Explosion::new(&scene, a.by, a.distance);
@@ -168,6 +180,7 @@ pub fn run(mut scene: Scene, options: ViewerOptions) -> Result<ViewerReport, Vie
     let orbit = Orbit::fit(&scene, options.fov_y, options.size);
     let mut app = App {
         scene,
+        upgrade,
         playing,
         options,
         orbit,
@@ -208,6 +221,8 @@ pub fn run(mut scene: Scene, options: ViewerOptions) -> Result<ViewerReport, Vie
 
 struct App {
     scene: Scene,
+    /// Where a better scene may come from (see [`run_upgrading`]).
+    upgrade: Option<std::sync::mpsc::Receiver<Scene>>,
     /// The implosion loop, with `--implode`.
     playing: Option<Playing>,
     options: ViewerOptions,
@@ -469,6 +484,41 @@ impl App {
         }
     }
 
+    /// Takes the upgraded scene when it has arrived; whether one is still awaited.
+    fn poll_upgrade(&mut self) -> bool {
+        use std::sync::mpsc::TryRecvError;
+        let Some(rx) = self.upgrade.as_ref() else {
+            return false;
+        };
+        let mut scene = match rx.try_recv() {
+            Ok(s) => s,
+            Err(TryRecvError::Empty) => return true,
+            Err(TryRecvError::Disconnected) => {
+                self.upgrade = None;
+                return false;
+            }
+        };
+        self.upgrade = None;
+        // Same patches, same bounds: the explosion's offsets still hold.
+        if let Some(p) = self.playing.as_ref() {
+            scene.bounds = p.explosion.bounds(&scene);
+        }
+        self.scene = scene;
+        let size = self
+            .state
+            .as_ref()
+            .map(|s| (s.config.width, s.config.height));
+        if let Some((w, h)) = size {
+            let view = self.view(w, h);
+            if let Some(s) = self.state.as_mut() {
+                s.frame = FrameState::new(&self.scene, &view, s.frame.lod.options);
+            }
+        }
+        (self.options.notify)("hierarchies ready: now drawing level-of-detail cuts");
+        self.dirty = true;
+        false
+    }
+
     fn fail(&mut self, event_loop: &ActiveEventLoop, e: ViewerError) {
         self.error = Some(e);
         event_loop.exit();
@@ -563,13 +613,17 @@ impl ApplicationHandler for App {
     }
 
     fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
+        let awaiting = self.poll_upgrade();
         // Scripted runs draw back to back; interactive ones only while something changes or
-        // the queue has work.
+        // the queue has work (and look for the upgraded scene 20 times a second meanwhile).
         if self.dirty || self.options.frames.is_some() {
             if let Some(s) = self.state.as_ref() {
                 s.window.request_redraw();
             }
             event_loop.set_control_flow(ControlFlow::Poll);
+        } else if awaiting {
+            let at = Instant::now() + Duration::from_millis(50);
+            event_loop.set_control_flow(ControlFlow::WaitUntil(at));
         } else {
             event_loop.set_control_flow(ControlFlow::Wait);
         }

@@ -5,6 +5,7 @@
 //! `validate`-style functions here into typed values, called where the command first needs
 //! them (after the model is loaded for the camera, so a missing file is reported first).
 
+use std::path::PathBuf;
 use std::time::Duration;
 
 use clap::Args;
@@ -12,6 +13,7 @@ use glam::DVec3;
 
 use patchwork::lod::LodOptions;
 use patchwork::model::Scene;
+use patchwork::prep::{Hierarchies, LoadOptions};
 use patchwork::render::{FatBorders, Primitives, RenderOptions, Shading};
 use patchwork::view::{self, View};
 
@@ -230,7 +232,8 @@ pub fn lod_options(pixel_error: f64, budget: Duration) -> LodOptions {
 #[derive(Args, Debug, Clone, Copy)]
 pub struct PrimitivesArg {
     /// Surface primitives: `auto` (lists for tessellated patches, multiresolution strips for
-    /// mesh patches: fastest measured), `list` (indexed triangles), `strips` (static triangle
+    /// mesh patches: fastest measured over many frames; lists for `render`'s one image),
+    /// `list` (indexed triangles), `strips` (static triangle
     /// strips by tunneling; per arc for mesh patches), `mts` (mesh patches: multiresolution
     /// strips at each cut) or `repair` (mesh patches: strips repaired by tunneling as the cut
     /// moves).
@@ -268,6 +271,31 @@ impl DrawArgs {
             depth: false,
             ..RenderOptions::default()
         }
+    }
+}
+
+/// The MT hierarchy cache of mesh models.
+#[derive(Args, Clone, Copy, Debug)]
+pub struct CacheArgs {
+    /// Neither read nor write the mesh hierarchy cache (in $PATCHWORK_CACHE, else
+    /// $XDG_CACHE_HOME/patchwork or ~/.cache/patchwork; PATCHWORK_CACHE=off also turns it off).
+    #[arg(long)]
+    pub no_cache: bool,
+}
+
+impl CacheArgs {
+    /// The cache directory, unless turned off.
+    pub fn dir(&self) -> Option<PathBuf> {
+        if self.no_cache {
+            None
+        } else {
+            patchwork::io::mt_cache::default_dir()
+        }
+    }
+
+    /// Load options with this cache and `hierarchies`.
+    pub fn options(&self, hierarchies: Hierarchies) -> LoadOptions {
+        LoadOptions::new(hierarchies, self.dir())
     }
 }
 

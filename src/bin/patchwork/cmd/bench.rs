@@ -23,7 +23,7 @@ use patchwork::report::scale as scale_report;
 use patchwork::strips::Join;
 use patchwork::view;
 
-use super::{load, progress};
+use super::{load_built, progress};
 use crate::args::{
     BudgetArgs, PrimitivesArg, at_least, fov_y, lod_options, parse_size, pixel_error, positive_ms,
 };
@@ -31,9 +31,11 @@ use crate::error::CliError;
 
 #[derive(Args, Debug)]
 pub struct BenchArgs {
-    /// Model file (.bpt, .step, .stp, .glb, .gltf, .obj, .ply): one for `--flythrough`, any
-    /// number (after the grids) for `--scale`.
+    /// Model file (.bpt, .step, .stp, .glb, .gltf, .obj, .ply, .stl): one for `--flythrough`,
+    /// any number (after the grids) for `--scale`.
     files: Vec<PathBuf>,
+    #[command(flatten)]
+    cache: crate::args::CacheArgs,
     /// Run the fly-through: orbit, zoom in close, a sudden jump, then still.
     #[arg(long)]
     flythrough: bool,
@@ -118,7 +120,7 @@ pub fn run(args: &BenchArgs) -> Result<bool, CliError> {
         .target_ms
         .map(|t| positive_ms("--target-ms", t))
         .transpose()?;
-    let scene = load(file)?;
+    let scene = load_built(file, &args.cache)?;
     let mut renderer = Renderer::new()?;
     renderer.static_arcs = !args.upload_cuts;
     renderer.primitives = args.primitives.primitives;

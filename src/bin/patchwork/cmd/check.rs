@@ -9,13 +9,15 @@ use patchwork::check::{CheckOptions, run_check};
 use patchwork::render::{FatBorders, Renderer};
 use patchwork::view;
 
-use super::{load, progress};
+use super::{load_built, progress};
 use crate::args::{PrimitivesArg, at_least, fov_y, parse_size, pixel_error};
 use crate::error::CliError;
 
 #[derive(Args, Debug)]
 pub struct CheckArgs {
     file: PathBuf,
+    #[command(flatten)]
+    cache: crate::args::CacheArgs,
     /// Number of random views.
     #[arg(long, default_value_t = 20)]
     views: usize,
@@ -50,7 +52,7 @@ pub fn run(args: &CheckArgs) -> Result<bool, CliError> {
     let fov_y = fov_y(args.fov)?;
     let pixel_error = pixel_error(args.pixel_error)?;
     let views = at_least("--views", args.views, 1)?;
-    let scene = load(&args.file)?;
+    let scene = load_built(&args.file, &args.cache)?;
     let mut renderer = Renderer::new()?;
     renderer.primitives = args.primitives.primitives;
     eprintln!("adapter: {}", renderer.gpu().describe());

@@ -9,14 +9,16 @@ use patchwork::export::{ExportOptions, Tolerance, assemble};
 use patchwork::io::gltf_out::write_glb;
 use patchwork::view;
 
-use super::load;
+use super::load_built;
 use crate::args::pixel_error;
 use crate::error::CliError;
 
 #[derive(Args, Debug)]
 pub struct ExportArgs {
-    /// Model file (.bpt, .step, .stp, .glb, .gltf, .obj, .ply).
+    /// Model file (.bpt, .step, .stp, .glb, .gltf, .obj, .ply, .stl).
     file: PathBuf,
+    #[command(flatten)]
+    cache: crate::args::CacheArgs,
     /// Output .glb file.
     #[arg(short, long)]
     output: PathBuf,
@@ -46,7 +48,7 @@ impl ExportArgs {
 }
 
 pub fn run(args: &ExportArgs) -> Result<(), CliError> {
-    let scene = load(&args.file)?;
+    let scene = load_built(&args.file, &args.cache)?;
     let opts = ExportOptions {
         tolerance: args.tolerance()?,
         ..ExportOptions::default()

@@ -15,14 +15,16 @@ use patchwork::io::png;
 use patchwork::render::Renderer;
 use patchwork::report::implode::{CrackSummary, FrameTimes, write_frames_csv};
 
-use super::{load, progress};
+use super::{load_built, progress};
 use crate::args::{BudgetArgs, CameraArgs, DrawArgs, at_least, distance, lod_options};
 use crate::error::CliError;
 
 #[derive(Args, Debug)]
 pub struct ImplodeArgs {
-    /// Model file (.bpt, .step, .stp, .glb, .gltf, .obj, .ply).
+    /// Model file (.bpt, .step, .stp, .glb, .gltf, .obj, .ply, .stl).
     file: PathBuf,
+    #[command(flatten)]
+    cache: crate::args::CacheArgs,
     /// Output folder (created if missing): frame-0000.png, …, implode.gif (explode.gif), and
     /// frames.csv with every frame's figures.
     #[arg(short, long)]
@@ -93,7 +95,7 @@ pub fn run(args: &ImplodeArgs) -> Result<bool, CliError> {
     let fps = args.fps;
     let budget = args.budget.validate()?;
     output_folder(&args.output)?;
-    let scene = load(&args.file)?;
+    let scene = load_built(&args.file, &args.cache)?;
     // Frame the whole flight: the view holds every frame.
     let explosion = Explosion::new(&scene, args.by, distance);
     let mut framing = scene.clone();

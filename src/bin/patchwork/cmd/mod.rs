@@ -15,14 +15,18 @@ use std::path::Path;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use patchwork::model::Scene;
+use patchwork::prep::{Hierarchies, LoadOptions, Loaded};
 use patchwork::tessellate::PatchMesh;
 
+use crate::args::CacheArgs;
 use crate::error::CliError;
 
-/// Loads a model and tells the user (stderr) what was left out and why.
-pub fn load(path: &Path) -> Result<Scene, CliError> {
-    let scene = patchwork::prep::load_with(path, &Bar::default())?;
-    for w in &scene.warnings {
+/// Loads a model as `options` say and tells the user (stderr) what was left out and why, and
+/// what went wrong with the hierarchy cache.
+pub fn load(path: &Path, options: &LoadOptions) -> Result<Loaded, CliError> {
+    let loaded = patchwork::prep::load_with_options(path, options, &Bar::default())?;
+    let scene = &loaded.scene;
+    for w in scene.warnings.iter().chain(&loaded.warnings) {
         eprintln!("warning: {}: {w}", path.display());
     }
     if !scene.skipped.is_empty() {
@@ -35,7 +39,12 @@ pub fn load(path: &Path) -> Result<Scene, CliError> {
             eprintln!("  face #{}: {}", s.face, s.reason);
         }
     }
-    Ok(scene)
+    Ok(loaded)
+}
+
+/// Loads a model with every hierarchy built (or read from the cache `cache` names).
+pub fn load_built(path: &Path, cache: &CacheArgs) -> Result<Scene, CliError> {
+    Ok(load(path, &cache.options(Hierarchies::Build))?.scene)
 }
 
 /// Reports patches whose tessellation failed (their faces are not drawn in this frame).

@@ -11,13 +11,15 @@ use patchwork::check::fidelity::measure_meshes;
 use patchwork::model::{Scene, bounding_box};
 use patchwork::tessellate::{MeshStats, PatchMesh, tessellate_scene};
 
-use super::load;
+use super::load_built;
 use crate::args::CameraArgs;
 use crate::error::CliError;
 
 #[derive(Args, Debug)]
 pub struct StatsArgs {
     file: PathBuf,
+    #[command(flatten)]
+    cache: crate::args::CacheArgs,
     #[command(flatten)]
     camera: CameraArgs,
     /// Print the placed solids / shells (instances): part, occurrence, shell, world bounding box.
@@ -30,7 +32,7 @@ pub struct StatsArgs {
 
 pub fn run(args: &StatsArgs) -> Result<(), CliError> {
     let t_load = Instant::now();
-    let scene = load(&args.file)?;
+    let scene = load_built(&args.file, &args.cache)?;
     let load_ms = t_load.elapsed().as_secs_f64() * 1e3;
     let camera = args.camera.validate()?;
     let view = camera.view(&scene)?;

@@ -16,8 +16,10 @@ use crate::error::CliError;
 
 #[derive(Args, Debug)]
 pub struct ViewArgs {
-    /// Model file (.bpt, .step, .stp, .glb, .gltf, .obj, .ply).
+    /// Model file (.bpt, .step, .stp, .glb, .gltf, .obj, .ply, .stl).
     file: PathBuf,
+    #[command(flatten)]
+    cache: crate::args::CacheArgs,
     /// Window size.
     #[arg(long, default_value = "1024x768", value_parser = parse_size)]
     size: (u32, u32),
@@ -76,12 +78,40 @@ pub fn run(args: &ViewArgs) -> Result<(), CliError> {
             frames: n,
         });
     }
-    let scene = load(&args.file)?;
+    // A mesh shows at once at full resolution (or from the cached hierarchies); its
+    // hierarchies are built on a background thread, written to the cache, and the viewer
+    // swaps in the scene that has them.
+    let loaded = load(
+        &args.file,
+        &args
+            .cache
+            .options(patchwork::prep::Hierarchies::CachedOrOriginal),
+    )?;
+    let scene = loaded.scene;
+    let upgrade = loaded.pending.map(|pending| {
+        let (tx, rx) = std::sync::mpsc::channel();
+        let (start, file) = (scene.clone(), args.file.clone());
+        std::thread::spawn(move || {
+            let t = std::time::Instant::now();
+            let built = pending.build(&start, &patchwork::prep::NoProgress);
+            for w in &built.warnings {
+                eprintln!("warning: {}: {w}", file.display());
+            }
+            eprintln!(
+                "{}: hierarchies built in {:.2} s",
+                file.display(),
+                t.elapsed().as_secs_f64()
+            );
+            // The viewer may have closed meanwhile: nobody to tell.
+            let _ = tx.send(built.scene);
+        });
+        rx
+    });
     let title = args.file.file_name().map_or_else(
         || "patchwork".into(),
         |n| format!("patchwork — {}", n.to_string_lossy()),
     );
-    let report = patchwork::viewer::run(
+    let report = patchwork::viewer::run_upgrading(
         scene,
         ViewerOptions {
             title,
@@ -99,6 +129,7 @@ pub fn run(args: &ViewArgs) -> Result<(), CliError> {
             primitives: args.primitives.primitives,
             notify: |m| eprintln!("{m}"),
         },
+        upgrade,
     )?;
     eprintln!(
         "{} frames ({} presented), {:.1} ms per frame on average",
