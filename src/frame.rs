@@ -23,8 +23,8 @@ use crate::check::crack::{CheckError, CrackCounts, Judge, Verdict, reference_mes
 use crate::lod::{FrameLoop, LodOptions, UpdateStats};
 use crate::model::Scene;
 use crate::render::{
-    FatBorders, Frame, Geometry, GpuMeshes, RenderOptions, Renderer, ResidentGeometry, Shading,
-    UploadStats,
+    FatBorders, Frame, Geometry, GpuMeshes, RenderError, RenderOptions, Renderer, ResidentGeometry,
+    Shading, UploadStats,
 };
 use crate::tessellate::PatchMesh;
 use crate::view::View;
@@ -55,14 +55,14 @@ impl FrameState {
 
     /// Makes the current meshes resident now (e.g. to time the first upload apart from the
     /// first frame); later default frames upload only the patches the LOD changed.
-    pub fn upload(&mut self, renderer: &Renderer) -> UploadStats {
+    pub fn upload(&mut self, renderer: &Renderer) -> Result<UploadStats, RenderError> {
         let t0 = Instant::now();
         let resident = self
             .resident
             .get_or_insert_with(|| ResidentGeometry::new(renderer));
-        let stats = resident.update(renderer, self.lod.shared_meshes(), self.lod.generation());
+        let stats = resident.update(renderer, self.lod.shared_meshes(), self.lod.generation())?;
         self.upload_ms = t0.elapsed().as_secs_f64() * 1e3;
-        stats
+        Ok(stats)
     }
 
     /// The resident geometry (after the first default frame or [`FrameState::upload`]).
@@ -138,7 +138,7 @@ pub fn step(
         let resident = state
             .resident
             .get_or_insert_with(|| ResidentGeometry::new(renderer));
-        let u = resident.update(renderer, state.lod.shared_meshes(), state.lod.generation());
+        let u = resident.update(renderer, state.lod.shared_meshes(), state.lod.generation())?;
         (Geometry::Resident(resident), Some(u), u.uploaded_bytes())
     } else {
         let gpu = renderer.upload(&drawn_meshes(&state.lod, offsets, opts.heat_map));

@@ -96,7 +96,9 @@ fn drive(
         for (k, m) in lod.shared_meshes() {
             held[k] = Some(m.clone());
         }
-        let stats = resident.update(renderer, lod.shared_meshes(), lod.generation());
+        let stats = resident
+            .update(renderer, lod.shared_meshes(), lod.generation())
+            .expect("the scene fits the device");
         each(i, renderer, &lod, resident, stats, changed);
         let f = renderer
             .render(
@@ -252,7 +254,7 @@ fn a_frame_where_nothing_changed_uploads_nothing() {
     let scene = common::teapot();
     let v = view(&scene, 0);
     let mut state = FrameState::new(&scene, &v, LodOptions::default());
-    let first = state.upload(&renderer);
+    let first = state.upload(&renderer).expect("the scene fits the device");
     assert_eq!(first.patches, scene.patches.len());
     assert!(first.geometry_bytes > 0);
     // Still camera: step until the frame loop is settled, then once more.
@@ -287,15 +289,21 @@ fn a_new_generation_without_new_meshes_only_rebuilds_the_draws() {
     let v = view(&scene, 0);
     let lod = FrameLoop::new(&scene, &v, LodOptions::default());
     let mut resident = ResidentGeometry::new(&renderer);
-    let first = resident.update(&renderer, lod.shared_meshes(), 7);
+    let first = resident
+        .update(&renderer, lod.shared_meshes(), 7)
+        .expect("fits");
     assert_eq!(first.patches, lod.meshes().count());
     // The same generation: nothing walked, nothing written.
     assert_eq!(
-        resident.update(&renderer, lod.shared_meshes(), 7),
+        resident
+            .update(&renderer, lod.shared_meshes(), 7)
+            .expect("fits"),
         UploadStats::default()
     );
     // Another generation, the same meshes: no geometry, only the draw arguments again.
-    let again = resident.update(&renderer, lod.shared_meshes(), 8);
+    let again = resident
+        .update(&renderer, lod.shared_meshes(), 8)
+        .expect("fits");
     assert_eq!(again.patches, 0);
     assert_eq!(again.geometry_bytes, 0);
     assert!(again.rebuilt);

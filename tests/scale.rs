@@ -84,7 +84,9 @@ fn grid_points_count_their_patches_and_converge_as_their_frames_say() {
                 p.rss_load_bytes.expect("VmHWM"),
                 p.peak_rss_bytes.expect("VmHWM"),
             );
-            assert!(start > 0 && start <= peak && load <= peak);
+            // Readings only, no order between them: the kernel updates VmHWM lazily, so a
+            // VmRSS read earlier can exceed a VmHWM read later (seen once on the GL run).
+            assert!(start > 0 && load > 0 && peak > 0, "{start} {load} {peak}");
         }
         // The grid's file is gone once loaded.
         assert!(

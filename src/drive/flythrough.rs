@@ -146,7 +146,7 @@ pub fn run(
     };
     let mut records = Vec::with_capacity(n);
     // GPU buffers are rebuilt only when the drawn meshes change.
-    let initial_upload = state.upload(renderer);
+    let initial_upload = state.upload(renderer)?;
     let initial_upload_ms = state.upload_ms;
     for i in 0..n {
         let view = camera_path(scene, i, n, opts.fov_y, opts.size);

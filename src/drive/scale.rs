@@ -232,13 +232,13 @@ pub fn run_point(
     let lod_bytes_first = state.lod.memory().total();
     let rss_tessellate_bytes = peak_rss_bytes();
 
-    // Upload and frames: a failure inside wgpu (a buffer past the device's limits) panics;
-    // it ends the point, recorded, rather than the process.
+    // Upload and frames: a scene too big for the device (a buffer past its limits) or a panic
+    // inside wgpu ends the point, recorded, rather than the process.
     on_stage("frames");
     let mut records = Vec::with_capacity(n);
     let mut upload_ms = 0.0;
     let drawn = isolated(|| -> Result<(), CheckError> {
-        state.upload(renderer);
+        state.upload(renderer)?;
         upload_ms = state.upload_ms;
         let step_opts = StepOptions {
             draw: RenderOptions::default(),
@@ -268,10 +268,10 @@ pub fn run_point(
         Ok(())
     });
     let failure = match drawn {
-        Ok(r) => {
-            r?;
-            None
-        }
+        Ok(Ok(())) => None,
+        // Too big for the device (a buffer past its limit): recorded, like a panic.
+        Ok(Err(CheckError::Render(e))) => Some(e.to_string()),
+        Ok(Err(e)) => return Err(e.into()),
         Err(panic) => Some(last_line(&panic)),
     };
     let jump_frame = jump_frames(n).1;

@@ -27,6 +27,16 @@ pub enum RenderError {
     Gpu(String),
     #[error("reading back the rendered image failed: {0}")]
     Readback(String),
+    /// A buffer the scene needs is larger than the device allows (e.g. the fat-border
+    /// vertices of a million patches past wgpu's 2 GiB buffers).
+    #[error(
+        "the {what} of this scene need {bytes} bytes: more than this adapter's largest buffer ({limit} bytes)"
+    )]
+    TooLarge {
+        what: &'static str,
+        bytes: u64,
+        limit: u64,
+    },
 }
 
 /// Device, queue and a description of the adapter in use.

@@ -343,13 +343,15 @@ impl ResidentGeometry {
 
     /// Makes the patches `meshes` (scene index, mesh; the patches to draw, in scene order)
     /// resident and the draw list theirs. Nothing is walked when `generation` (the frame
-    /// loop's, which changes whenever the meshes to draw change) is the last one seen.
+    /// loop's, which changes whenever the meshes to draw change) is the last one seen. A
+    /// pool that would pass the device's largest buffer is [`RenderError::TooLarge`]; the
+    /// geometry is then emptied (the next update starts afresh).
     pub fn update<'a>(
         &mut self,
         renderer: &Renderer,
         meshes: impl IntoIterator<Item = (usize, &'a Arc<PatchMesh>)>,
         generation: u64,
-    ) -> UploadStats {
+    ) -> Result<UploadStats, RenderError> {
         let config = (
             renderer.primitives,
             renderer.strip_join,
@@ -362,7 +364,7 @@ impl ResidentGeometry {
         }
         let mut stats = UploadStats::default();
         if self.generation == Some(generation) {
-            return stats;
+            return Ok(stats);
         }
         self.generation = Some(generation);
         let drawn: Vec<(usize, &Arc<PatchMesh>)> = meshes.into_iter().collect();
@@ -391,17 +393,27 @@ impl ResidentGeometry {
                 .map(|&(i, m)| Built::new(renderer, i, m, None, false))
                 .collect();
             stats.patches = built.len();
-            self.place(renderer, built, &mut stats);
+            if let Err(e) = self.place(renderer, built, &mut stats) {
+                let fault = self.fault;
+                *self = ResidentGeometry::new(renderer);
+                self.fault = fault;
+                return Err(e);
+            }
         }
         self.drawn = drawn.iter().map(|d| d.0).collect();
         let order = std::mem::take(&mut self.drawn);
         self.rebuild_draws(renderer, &order, &mut stats);
         self.drawn = order;
-        stats
+        Ok(stats)
     }
 
     /// Frees the changed slots' ranges, allocates and writes the new ones.
-    fn place(&mut self, renderer: &Renderer, built: Vec<Built>, stats: &mut UploadStats) {
+    fn place(
+        &mut self,
+        renderer: &Renderer,
+        built: Vec<Built>,
+        stats: &mut UploadStats,
+    ) -> Result<(), RenderError> {
         let gpu = &renderer.gpu;
         for b in &built {
             let slot = &mut self.slots[b.slot];
@@ -420,7 +432,7 @@ impl ResidentGeometry {
             if needed == 0 {
                 continue;
             }
-            let copied = self.pools[p].reserve(gpu, needed);
+            let copied = self.pools[p].reserve(gpu, needed)?;
             stats.copied_bytes += copied;
             stats.grown += usize::from(copied > 0);
             for b in &built {
@@ -453,6 +465,7 @@ impl ResidentGeometry {
         let fresh: std::collections::HashSet<usize> = built.iter().map(|b| b.slot).collect();
         moved.retain(|i| !fresh.contains(i));
         self.reindex(renderer, moved, stats);
+        Ok(())
     }
 
     /// Writes the index streams of the slots `moved` again (their vertices moved).

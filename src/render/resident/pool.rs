@@ -3,7 +3,7 @@
 //! (ranges move; the caller fixes what refers to them).
 
 use super::alloc::{Allocator, Move};
-use crate::render::Gpu;
+use crate::render::{Gpu, RenderError};
 
 /// Units a new pool holds (empty buffers cannot be bound).
 const MIN_CAPACITY: u64 = 1024;
@@ -38,13 +38,27 @@ impl Pool {
     }
 
     /// Makes room for `needed` more units in all (not necessarily in one range): grows to
-    /// at least 1.5× when the free units fall short. Returns the bytes copied on the GPU.
-    pub(crate) fn reserve(&mut self, gpu: &Gpu, needed: u64) -> u64 {
+    /// at least 1.5× when the free units fall short, never past the device's largest buffer
+    /// ([`RenderError::TooLarge`] when even that is too small). Returns the bytes copied on
+    /// the GPU.
+    pub(crate) fn reserve(&mut self, gpu: &Gpu, needed: u64) -> Result<u64, RenderError> {
         if self.alloc.free() >= needed {
-            return 0;
+            return Ok(0);
         }
-        let want = (self.alloc.used() + needed) * 9 / 8;
-        let capacity = want.max(self.alloc.capacity() * 3 / 2).max(MIN_CAPACITY);
+        let limit = gpu.device.limits().max_buffer_size;
+        let max_units = limit / self.unit;
+        let used = self.alloc.used() + needed;
+        if used > max_units {
+            return Err(RenderError::TooLarge {
+                what: self.label,
+                bytes: used.saturating_mul(self.unit),
+                limit,
+            });
+        }
+        let want = (used * 9 / 8).min(max_units);
+        let capacity = want
+            .max((self.alloc.capacity() * 3 / 2).min(max_units))
+            .max(MIN_CAPACITY.min(max_units));
         let new = buffer(gpu, self.label, self.usage, capacity * self.unit);
         let copied = self.alloc.capacity() * self.unit;
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
@@ -52,7 +66,7 @@ impl Pool {
         gpu.queue.submit([encoder.finish()]);
         self.buffer = new;
         self.alloc.grow(capacity);
-        copied
+        Ok(copied)
     }
 
     /// Packs the live ranges in `order` (starts; see [`Allocator::compact`]) into a new buffer
