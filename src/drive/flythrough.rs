@@ -95,6 +95,31 @@ pub struct FrameRecord {
     pub crack_pixels_off: Option<usize>,
 }
 
+impl FrameRecord {
+    /// The record of frame `frame`, from what [`step`] reported, at pixel error
+    /// `pixel_error`.
+    pub fn of(frame: usize, r: &crate::frame::StepResult, pixel_error: f64) -> FrameRecord {
+        FrameRecord {
+            frame,
+            frame_ms: r.frame_time.as_secs_f64() * 1e3,
+            tessellation_ms: r.stats.tessellation.as_secs_f64() * 1e3,
+            upload_ms: r.upload_ms,
+            draw_ms: r.draw_ms,
+            cpu_ms: r.cpu_ms,
+            uploaded_bytes: r.uploaded_bytes,
+            retessellated: r.stats.retessellated,
+            from_cache: r.stats.from_cache,
+            queue_left: r.stats.queue_left,
+            max_error_px: r.max_error_px,
+            p99_error_px: r.p99_error_px,
+            triangles: r.stats.triangles,
+            pixel_error,
+            crack_pixels: r.verdict.as_ref().map(|v| v.counts.cracks()),
+            crack_pixels_off: r.control.map(|c| c.cracks()),
+        }
+    }
+}
+
 /// Summary of a run.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct FlythroughSummary {
@@ -152,24 +177,7 @@ pub fn run(
         let view = camera_path(scene, i, n, opts.fov_y, opts.size);
         let r = step(renderer, scene, &mut state, &view, &step_opts)?;
         let pixel_error = state.lod.options.pixel_error;
-        let record = FrameRecord {
-            frame: i,
-            frame_ms: r.frame_time.as_secs_f64() * 1e3,
-            tessellation_ms: r.stats.tessellation.as_secs_f64() * 1e3,
-            upload_ms: r.upload_ms,
-            draw_ms: r.draw_ms,
-            cpu_ms: r.cpu_ms,
-            uploaded_bytes: r.uploaded_bytes,
-            retessellated: r.stats.retessellated,
-            from_cache: r.stats.from_cache,
-            queue_left: r.stats.queue_left,
-            max_error_px: r.max_error_px,
-            p99_error_px: r.p99_error_px,
-            triangles: r.stats.triangles,
-            pixel_error,
-            crack_pixels: r.verdict.map(|v| v.counts.cracks()),
-            crack_pixels_off: r.control.map(|c| c.cracks()),
-        };
+        let record = FrameRecord::of(i, &r, pixel_error);
         on_frame(&record);
         records.push(record);
         if let Some(c) = controller.as_mut() {

@@ -247,23 +247,7 @@ pub fn run_point(
         for i in 0..n {
             let view = camera_path(&scene, i, n, opts.fov_y, opts.size);
             let r = step(renderer, &scene, &mut state, &view, &step_opts)?;
-            records.push(FrameRecord {
-                frame: i,
-                frame_ms: r.frame_time.as_secs_f64() * 1e3,
-                tessellation_ms: r.stats.tessellation.as_secs_f64() * 1e3,
-                retessellated: r.stats.retessellated,
-                from_cache: r.stats.from_cache,
-                queue_left: r.stats.queue_left,
-                max_error_px: r.max_error_px,
-                p99_error_px: r.p99_error_px,
-                triangles: r.stats.triangles,
-                pixel_error: state.lod.options.pixel_error,
-                upload_ms: r.upload_ms,
-                draw_ms: r.draw_ms,
-                cpu_ms: r.cpu_ms,
-                uploaded_bytes: r.uploaded_bytes,
-                ..FrameRecord::default()
-            });
+            records.push(FrameRecord::of(i, &r, state.lod.options.pixel_error));
         }
         Ok(())
     });

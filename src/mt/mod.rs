@@ -233,8 +233,14 @@ mod fixtures {
         m
     }
 
-    /// Sampled two-sided Hausdorff distance between two triangle sets over `pos`.
-    pub(super) fn sampled_hausdorff(pos: &[DVec3], x: &[[u32; 3]], y: &[[u32; 3]]) -> f64 {
+    /// Largest distance from the points `points` picks on each triangle of one set to the
+    /// other set, both ways: a two-sided Hausdorff distance over those points.
+    fn two_sided(
+        pos: &[DVec3],
+        x: &[[u32; 3]],
+        y: &[[u32; 3]],
+        points: impl Fn([DVec3; 3]) -> Vec<DVec3>,
+    ) -> f64 {
         let dist_to = |p: DVec3, tris: &[[u32; 3]]| {
             tris.iter()
                 .map(|t| {
@@ -246,41 +252,34 @@ mod fixtures {
         let mut worst = 0.0f64;
         for (from, to) in [(x, y), (y, x)] {
             for t in from {
-                let [a, b, c] = t.map(|i| pos[i as usize]);
-                for s in samples(a, b, c) {
-                    worst = worst.max(dist_to(s, to));
+                for p in points(t.map(|i| pos[i as usize])) {
+                    worst = worst.max(dist_to(p, to));
                 }
             }
         }
         worst
     }
 
+    /// Sampled two-sided Hausdorff distance between two triangle sets over `pos`.
+    pub(super) fn sampled_hausdorff(pos: &[DVec3], x: &[[u32; 3]], y: &[[u32; 3]]) -> f64 {
+        two_sided(pos, x, y, |[a, b, c]| {
+            samples(a, b, c).into_iter().collect()
+        })
+    }
+
     /// Two-sided Hausdorff distance between two triangle sets over `pos`, measured densely:
     /// every triangle sampled on a barycentric grid of `k` steps per edge ((k+1)(k+2)/2
     /// points), independent of the 7 samples the build uses.
     pub(super) fn dense_hausdorff(pos: &[DVec3], x: &[[u32; 3]], y: &[[u32; 3]], k: u32) -> f64 {
-        let dist_to = |p: DVec3, tris: &[[u32; 3]]| {
-            tris.iter()
-                .map(|t| {
-                    let [a, b, c] = t.map(|i| pos[i as usize]);
-                    point_triangle_distance(p, a, b, c)
+        two_sided(pos, x, y, |[a, b, c]| {
+            (0..=k)
+                .flat_map(|i| (0..=k - i).map(move |j| (i, j)))
+                .map(|(i, j)| {
+                    let (u, v) = (i as f64 / k as f64, j as f64 / k as f64);
+                    a + (b - a) * u + (c - a) * v
                 })
-                .fold(f64::INFINITY, f64::min)
-        };
-        let mut worst = 0.0f64;
-        for (from, to) in [(x, y), (y, x)] {
-            for t in from {
-                let [a, b, c] = t.map(|i| pos[i as usize]);
-                for i in 0..=k {
-                    for j in 0..=k - i {
-                        let (u, v) = (i as f64 / k as f64, j as f64 / k as f64);
-                        let p = a + (b - a) * u + (c - a) * v;
-                        worst = worst.max(dist_to(p, to));
-                    }
-                }
-            }
-        }
-        worst
+                .collect()
+        })
     }
 
     pub(super) fn edges_used(tris: &[[u32; 3]]) -> HashMap<(u32, u32), u32> {
