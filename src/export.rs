@@ -2,7 +2,9 @@
 //!
 //! [`assemble`] turns a [`Scene`] into the [`ExportScene`] that [`crate::io::gltf_out`] writes:
 //! - one node per placed solid / shell ([`Scene::instances`]) that has patches, named after its
-//!   part and occurrence, with the instance's transform;
+//!   occurrence, with the instance's (world) transform, under groups that follow the
+//!   occurrence paths (`a/b/c`: groups `a`, `b`, node `c`), all under one root group that turns
+//!   the model's axes and unit into the file's ([`ExportOptions::up`], [`ExportOptions::scale`]);
 //! - one mesh per shell (per part outside STEP: the key is `(part, shell)`), tessellated once in
 //!   the shell's own coordinates and shared by every placement of it; its colour is the first
 //!   coloured face's;
@@ -20,8 +22,8 @@ use std::collections::HashMap;
 use glam::DMat4;
 use thiserror::Error;
 
-use crate::io::gltf_out::{ExportMesh, ExportNode, ExportScene};
-use crate::model::{Patch, PatchSurface, Scene};
+use crate::io::gltf_out::{ExportGroup, ExportMesh, ExportNode, ExportScene};
+use crate::model::{Patch, PatchSurface, Scene, UpAxis};
 use crate::tessellate::{PatchMesh, Tessellators};
 use crate::view::{self, View};
 
@@ -43,15 +45,50 @@ pub struct ExportOptions {
     pub tolerance: Tolerance,
     /// Written as the file's `asset.generator`.
     pub generator: String,
+    /// The file's up axis: the root group turns the model's up axis into it (`None`: the
+    /// model's axes are kept).
+    pub up: Option<UpAxis>,
+    /// File units per model unit (0.001 for millimetres written as metres), applied by the
+    /// root group.
+    pub scale: f64,
+    /// Name of the root group (e.g. the file's name).
+    pub root_name: String,
 }
 
 impl Default for ExportOptions {
-    /// [`view::DEFAULT_PIXEL_ERROR`], generator `patchwork <version>`.
+    /// [`view::DEFAULT_PIXEL_ERROR`], generator `patchwork <version>`, the model's axes and
+    /// units kept.
     fn default() -> Self {
         ExportOptions {
             tolerance: Tolerance::PixelError(view::DEFAULT_PIXEL_ERROR),
             generator: format!("patchwork {}", env!("CARGO_PKG_VERSION")),
+            up: None,
+            scale: 1.0,
+            root_name: String::new(),
         }
+    }
+}
+
+/// Length of one unit in metres, for the unit names [`Scene::unit`] and `export --unit` use
+/// (`m`, `cm`, `mm`, `in`, `ft`).
+pub fn metres_per_unit(unit: &str) -> Option<f64> {
+    Some(match unit {
+        "m" => 1.0,
+        "cm" => 0.01,
+        "mm" => 0.001,
+        "in" => 0.0254,
+        "ft" => 0.3048,
+        _ => return None,
+    })
+}
+
+/// The rotation taking a model whose up axis is `from` to one whose up axis is `to`, keeping
+/// its front facing the viewer (z-up front −y ↔ y-up front +z): ∓90° about x.
+pub fn up_rotation(from: UpAxis, to: UpAxis) -> DMat4 {
+    match (from, to) {
+        (UpAxis::Z, UpAxis::Y) => DMat4::from_rotation_x(-std::f64::consts::FRAC_PI_2),
+        (UpAxis::Y, UpAxis::Z) => DMat4::from_rotation_x(std::f64::consts::FRAC_PI_2),
+        _ => DMat4::IDENTITY,
     }
 }
 
@@ -61,6 +98,9 @@ pub enum ExportError {
     /// The tolerance is not a positive finite number.
     #[error("the export tolerance must be a positive number, not {0:?}")]
     Tolerance(Tolerance),
+    /// The unit scale is not a positive finite number.
+    #[error("the export scale must be a positive number, not {0}")]
+    Scale(f64),
 }
 
 /// The view a [`Tolerance::PixelError`] is measured in: the scene framed from the default
@@ -103,7 +143,23 @@ pub fn assemble(scene: &Scene, opts: &ExportOptions) -> Result<ExportScene, Expo
     if !(t.is_finite() && t > 0.0) {
         return Err(ExportError::Tolerance(opts.tolerance));
     }
+    if !(opts.scale.is_finite() && opts.scale > 0.0) {
+        return Err(ExportError::Scale(opts.scale));
+    }
     let view = default_view(scene);
+    // The root group: the model's axes and unit turned into the file's.
+    let rotation = opts
+        .up
+        .map_or(DMat4::IDENTITY, |to| up_rotation(scene.up, to));
+    let root = DMat4::from_scale(glam::DVec3::splat(opts.scale)) * rotation;
+    let mut tree = Tree {
+        groups: vec![ExportGroup {
+            name: opts.root_name.clone(),
+            matrix: root.as_mat4().to_cols_array(),
+            parent: None,
+        }],
+        by_path: HashMap::new(),
+    };
     let mut by_instance: Vec<Vec<&Patch>> = vec![Vec::new(); scene.instances.len()];
     for p in &scene.patches {
         if let Some(list) = by_instance.get_mut(p.instance as usize) {
@@ -149,8 +205,13 @@ pub fn assemble(scene: &Scene, opts: &ExportOptions) -> Result<ExportScene, Expo
                 meshes.len() - 1
             }
         };
-        let name = match (inst.name.is_empty(), inst.shell) {
-            (false, _) => format!("{part_name} {}", inst.name),
+        // The occurrence path `a/b/c`: groups `a` and `a/b`, the node named `c`.
+        let (parent, leaf) = match inst.name.rsplit_once('/') {
+            Some((path, leaf)) => (tree.group(path), leaf),
+            None => (0, inst.name.as_str()),
+        };
+        let name = match (leaf.is_empty(), inst.shell) {
+            (false, _) => leaf.to_owned(),
             (true, Some(shell)) => format!("{part_name} shell #{shell} {index}"),
             (true, None) => format!("{part_name} {index}"),
         };
@@ -158,13 +219,43 @@ pub fn assemble(scene: &Scene, opts: &ExportOptions) -> Result<ExportScene, Expo
             name,
             mesh,
             matrix: inst.transform.as_mat4().to_cols_array(),
+            parent: Some(parent),
         });
     }
     Ok(ExportScene {
         meshes,
         nodes,
+        groups: tree.groups,
         generator: opts.generator.clone(),
     })
+}
+
+/// The groups of the assembly tree, made as occurrence paths name them. Instance transforms
+/// are world transforms, so every group below the root has the identity matrix: the tree
+/// keeps the structure and names, each node its whole placement.
+struct Tree {
+    groups: Vec<ExportGroup>,
+    by_path: HashMap<String, usize>,
+}
+
+impl Tree {
+    /// The group of occurrence path `path` (`a/b`), made with its ancestors if new.
+    fn group(&mut self, path: &str) -> usize {
+        if let Some(&g) = self.by_path.get(path) {
+            return g;
+        }
+        let (parent, name) = match path.rsplit_once('/') {
+            Some((up, name)) => (self.group(up), name),
+            None => (0, path),
+        };
+        self.groups.push(ExportGroup {
+            name: name.to_owned(),
+            matrix: crate::io::gltf_out::IDENTITY_MATRIX,
+            parent: Some(parent),
+        });
+        self.by_path.insert(path.to_owned(), self.groups.len() - 1);
+        self.groups.len() - 1
+    }
 }
 
 /// Appends the triangles of `m` with only the vertices they use: a trimmed face's mesh also

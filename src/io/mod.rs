@@ -22,6 +22,7 @@ pub mod mt_cache;
 pub mod png;
 pub mod step;
 pub mod stl;
+pub mod stl_out;
 
 use std::path::{Path, PathBuf};
 
@@ -173,6 +174,13 @@ pub enum Model {
     Mesh(mesh::TriMesh),
     /// A STEP file's faces and product structure (`.step`, `.stp`, also gzipped).
     Step(Box<step::StepModel>),
+}
+
+/// The length unit a format states for its coordinates: metres for glTF (`.glb`, `.gltf`);
+/// `None` for formats that state none. STEP scenes carry theirs (millimetres) themselves.
+pub fn stated_unit(path: &Path) -> Option<&'static str> {
+    let extension = path.extension()?.to_string_lossy().to_ascii_lowercase();
+    matches!(extension.as_str(), "glb" | "gltf").then_some("m")
 }
 
 /// Reads a model, choosing the reader by the file's extension (case-insensitive); any other

@@ -180,6 +180,9 @@ pub struct Scene {
     pub skipped: Vec<SkippedFace>,
     /// What the reader wants the user to know (unsupported entities, repairs).
     pub warnings: Vec<String>,
+    /// The length unit of the coordinates when the format states one (`"mm"`: STEP, scaled
+    /// to millimetres; `"m"`: glTF); `None` when it does not (`.bpt`, OBJ, PLY, STL).
+    pub unit: Option<&'static str>,
 }
 
 impl Scene {
@@ -231,6 +234,7 @@ impl Scene {
             }],
             skipped: Vec::new(),
             warnings,
+            unit: None,
         }
     }
 

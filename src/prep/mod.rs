@@ -131,7 +131,9 @@ pub fn load(path: &Path) -> Result<Scene, LoadError> {
 
 /// As [`load`], reporting long steps to `progress`.
 pub fn load_with(path: &Path, progress: &dyn Progress) -> Result<Scene, LoadError> {
-    prepare(crate::io::read_with(path, progress)?, progress)
+    let mut scene = prepare(crate::io::read_with(path, progress)?, progress)?;
+    scene.unit = scene.unit.or(crate::io::stated_unit(path));
+    Ok(scene)
 }
 
 /// Prepares a model read by [`crate::io::read`], building every hierarchy (no cache).
@@ -158,7 +160,8 @@ pub fn load_with_options(
 ) -> Result<Loaded, LoadError> {
     let model = crate::io::read(path)?;
     let Model::Mesh(mesh) = model else {
-        let scene = prepare(model, progress)?;
+        let mut scene = prepare(model, progress)?;
+        scene.unit = scene.unit.or(crate::io::stated_unit(path));
         return Ok(Loaded {
             scene,
             pending: None,
@@ -230,8 +233,10 @@ pub fn load_with_options(
             (parts, Some(pending))
         }
     };
+    let mut scene = scene_of(parts, UpAxis::Y, bbox, weld_warnings);
+    scene.unit = crate::io::stated_unit(path);
     Ok(Loaded {
-        scene: scene_of(parts, UpAxis::Y, bbox, weld_warnings),
+        scene,
         pending,
         warnings,
     })

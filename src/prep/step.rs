@@ -182,6 +182,7 @@ pub fn assemble(model: StepModel, progress: &dyn Progress) -> Result<Scene, Load
         instances,
         skipped,
         warnings,
+        unit: Some("mm"),
     })
 }
 

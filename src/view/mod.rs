@@ -12,6 +12,10 @@
 //! clamped to at least the near-plane distance (otherwise an eye inside a patch's bounding sphere
 //! would ask for ε = 0, an infinitely fine tessellation).
 
+mod framing;
+
+pub use framing::{DEFAULT_MARGIN, Framing, ModelFrame, NamedView};
+
 use glam::{DMat4, DVec3, DVec4, Mat4};
 
 use crate::model::Sphere;
@@ -71,15 +75,9 @@ impl View {
         up: DVec3,
         dir: DVec3,
         fov_y: f64,
-        (width, height): (u32, u32),
+        size: (u32, u32),
     ) -> View {
-        let aspect = width.max(1) as f64 / height.max(1) as f64;
-        let fov_x = 2.0 * ((fov_y * 0.5).tan() * aspect).atan();
-        let half = 0.5 * fov_y.min(fov_x);
-        let radius = bounds.radius.max(1e-12);
-        let dist = radius / half.sin() * 1.02;
-        let eye = bounds.center + dir.normalize() * dist;
-        View::new(eye, bounds.center, up, fov_y, (width, height), bounds)
+        Self::framing_with_margin(bounds, up, dir, fov_y, size, framing::DEFAULT_MARGIN)
     }
 
     pub fn aspect(&self) -> f64 {

@@ -35,7 +35,7 @@ use crate::model::Scene;
 use crate::render::gpu::Gpu;
 use crate::render::{FatBorders, Frame, RenderError, RenderOptions, Renderer, Shading};
 use crate::tessellate::PatchMesh;
-use crate::view::View;
+use crate::view::{Framing, View};
 
 mod orbit;
 mod overlay;
@@ -69,6 +69,13 @@ pub struct ViewerOptions {
     pub title: String,
     pub size: (u32, u32),
     pub fov_y: f64,
+    /// The starting camera's direction and margin (also what `f` returns to).
+    pub framing: crate::view::Framing,
+    /// Starting eye (instead of the framing's) and target (default: the model's centre).
+    pub eye: Option<DVec3>,
+    pub target: Option<DVec3>,
+    /// The orbit's up axis (default: the model's).
+    pub up: Option<DVec3>,
     pub lod: LodOptions,
     /// Scripted run: draw this many frames, then exit.
     pub frames: Option<usize>,
@@ -177,7 +184,21 @@ pub fn run_upgrading(
             paused: false,
         }
     });
-    let orbit = Orbit::fit(&scene, options.fov_y, options.size);
+    let up = options.up.unwrap_or_else(|| scene.up.vector());
+    let target = options.target.unwrap_or(scene.bounds.center);
+    let orbit = match options.eye {
+        Some(eye) => Orbit::looking(eye, target, up),
+        None => {
+            let fit = Orbit::fit(
+                &scene,
+                options.up,
+                &options.framing,
+                options.fov_y,
+                options.size,
+            );
+            Orbit { target, ..fit }
+        }
+    };
     let mut app = App {
         scene,
         upgrade,
@@ -439,7 +460,13 @@ impl App {
                     .state
                     .as_ref()
                     .map_or(self.options.size, |s| (s.config.width, s.config.height));
-                self.orbit = Orbit::fit(&self.scene, self.options.fov_y, size);
+                self.orbit = Orbit::fit(
+                    &self.scene,
+                    self.options.up,
+                    &self.options.framing,
+                    self.options.fov_y,
+                    size,
+                );
             }
             Key::Character("b") => {
                 self.fat_borders = match self.fat_borders {
@@ -648,14 +675,20 @@ mod tests {
     fn orbit_fit_reproduces_the_framing_view() {
         let s = scene();
         let fov = 45f64.to_radians();
-        let o = Orbit::fit(&s, fov, (640, 480));
+        let o = Orbit::fit(&s, None, &Framing::default(), fov, (640, 480));
         let v = View::framing(&s.bounds, s.up.vector(), fov, (640, 480));
         assert!(o.eye().distance(v.eye) < 1e-9, "{} vs {}", o.eye(), v.eye);
     }
 
     #[test]
     fn orbit_rotation_keeps_distance_and_clamps_pitch() {
-        let mut o = Orbit::fit(&scene(), 45f64.to_radians(), (640, 480));
+        let mut o = Orbit::fit(
+            &scene(),
+            None,
+            &Framing::default(),
+            45f64.to_radians(),
+            (640, 480),
+        );
         let d = o.distance;
         o.rotate(1.0, 10.0);
         assert!((o.eye().distance(o.target) - d).abs() < 1e-9);

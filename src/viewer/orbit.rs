@@ -15,18 +15,40 @@ pub struct Orbit {
 }
 
 impl Orbit {
-    /// The camera of [`View::framing`] (fit to view).
-    pub fn fit(scene: &Scene, fov_y: f64, size: (u32, u32)) -> Orbit {
-        let up = scene.up.vector();
-        let v = View::framing(&scene.bounds, up, fov_y, size);
-        let d = v.eye - v.target;
+    /// The camera of [`View::framed`] (fit to view, from the framing's direction).
+    pub fn fit(
+        scene: &Scene,
+        up: Option<DVec3>,
+        framing: &Framing,
+        fov_y: f64,
+        size: (u32, u32),
+    ) -> Orbit {
+        let up = up.unwrap_or_else(|| scene.up.vector());
+        let v = View::framed(&scene.bounds, up, framing, fov_y, size);
+        Orbit::looking(v.eye, v.target, up)
+    }
+
+    /// The orbit whose camera stands at `eye` looking at `target` (pitch kept within ±89°).
+    pub fn looking(eye: DVec3, target: DVec3, up: DVec3) -> Orbit {
+        let up = up.try_normalize().unwrap_or(DVec3::Y);
+        let d = eye - target;
         let (x, y) = basis(up);
-        let h = d - up * d.dot(up);
+        let mut h = d - up * d.dot(up);
+        if h.length() < 1e-9 * d.length() {
+            // Straight above or below: the orbit stands just in front (the top view's front
+            // at the bottom of the image).
+            h = crate::view::ModelFrame::of(up).front;
+        }
+        let limit = 89f64.to_radians();
+        let length = d.length().max(1e-9);
         Orbit {
-            target: v.target,
-            distance: d.length(),
+            target,
+            distance: length,
             yaw: h.dot(y).atan2(h.dot(x)),
-            pitch: (d.dot(up) / d.length()).clamp(-1.0, 1.0).asin(),
+            pitch: (d.dot(up) / length)
+                .clamp(-1.0, 1.0)
+                .asin()
+                .clamp(-limit, limit),
             up,
         }
     }

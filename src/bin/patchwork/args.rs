@@ -15,7 +15,7 @@ use patchwork::lod::LodOptions;
 use patchwork::model::Scene;
 use patchwork::prep::{Hierarchies, LoadOptions};
 use patchwork::render::{FatBorders, Primitives, RenderOptions, Shading};
-use patchwork::view::{self, View};
+use patchwork::view::{self, Framing, NamedView, View};
 
 use crate::error::CliError;
 
@@ -100,6 +100,30 @@ pub fn fov_y(deg: f64) -> Result<f64, CliError> {
     Ok(deg.to_radians())
 }
 
+/// A finite number (angles in degrees).
+pub fn finite(flag: &'static str, value: f64) -> Result<f64, CliError> {
+    if !value.is_finite() {
+        return Err(CliError::OutOfRange {
+            flag,
+            value,
+            range: "a finite number",
+        });
+    }
+    Ok(value)
+}
+
+/// `--margin`: from -0.9 (the model's sphere cropped to a tenth) to 100.
+pub fn margin(value: f64) -> Result<f64, CliError> {
+    if !(value.is_finite() && (-0.9..=100.0).contains(&value)) {
+        return Err(CliError::OutOfRange {
+            flag: "--margin",
+            value,
+            range: "from -0.9 to 100",
+        });
+    }
+    Ok(value)
+}
+
 /// A positive finite number of milliseconds → a duration.
 pub fn positive_ms(flag: &'static str, ms: f64) -> Result<Duration, CliError> {
     if !(ms.is_finite() && ms > 0.0) {
@@ -132,9 +156,36 @@ pub struct CameraArgs {
     /// Image size in pixels.
     #[arg(long, default_value = "1024x768", value_parser = parse_size)]
     pub size: (u32, u32),
-    /// Eye position (default: frames the model's bounding sphere from a three-quarter view).
+    /// Eye position (default: frames the model's bounding sphere from a three-quarter view,
+    /// or from --view, --azimuth and --elevation).
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
     pub eye: Option<DVec3>,
+    /// Named view, in the model's frame (front is -y for z-up models, +z for y-up ones):
+    /// front, back, left, right, top, bottom or iso.
+    #[arg(long, conflicts_with = "eye")]
+    pub view: Option<NamedView>,
+    /// Turn the camera about the model's up axis by this many degrees (positive: towards the
+    /// model's right), after --view.
+    #[arg(
+        long,
+        default_value_t = 0.0,
+        allow_hyphen_values = true,
+        conflicts_with = "eye"
+    )]
+    pub azimuth: f64,
+    /// Raise the camera by this many degrees towards the up axis (negative lowers it), after
+    /// --view and --azimuth; the result is kept within ±90°.
+    #[arg(
+        long,
+        default_value_t = 0.0,
+        allow_hyphen_values = true,
+        conflicts_with = "eye"
+    )]
+    pub elevation: f64,
+    /// Room around the model: the camera stands 1 + MARGIN times the distance at which the
+    /// model's bounding sphere touches the nearer image edges (0 touches; negative zooms in).
+    #[arg(long, default_value_t = view::DEFAULT_MARGIN, allow_hyphen_values = true, conflicts_with = "eye")]
+    pub margin: f64,
     /// Point looked at (default: the model's centre).
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
     pub target: Option<DVec3>,
@@ -159,6 +210,8 @@ pub struct Camera {
     /// Radians.
     pub fov_y: f64,
     pub pixel_error: f64,
+    /// Direction and margin of the default camera (when no eye is given).
+    pub framing: Framing,
 }
 
 impl CameraArgs {
@@ -170,6 +223,12 @@ impl CameraArgs {
             up: self.up,
             fov_y: fov_y(self.fov)?,
             pixel_error: pixel_error(self.pixel_error)?,
+            framing: Framing {
+                view: self.view,
+                azimuth_deg: finite("--azimuth", self.azimuth)?,
+                elevation_deg: finite("--elevation", self.elevation)?,
+                margin: margin(self.margin)?,
+            },
         })
     }
 }
@@ -196,11 +255,12 @@ impl Camera {
                 View::new(eye, target, up, fov, size, &scene.bounds)
             }
             None => {
-                let mut v = View::framing(&scene.bounds, up, fov, size);
+                let mut v = View::framed(&scene.bounds, up, &self.framing, fov, size);
                 let shift = target - v.target;
                 v.eye += shift;
                 v.target = target;
-                View::new(v.eye, v.target, up, fov, size, &scene.bounds)
+                // The framing's screen up: the model's up, or its back in a top view.
+                View::new(v.eye, v.target, v.up, fov, size, &scene.bounds)
             }
         };
         Ok(view)

@@ -59,6 +59,27 @@ pub enum CliError {
         value: usize,
         min: usize,
     },
+    /// `export -o` with an extension that names no format we write.
+    #[error("{}: unknown export format (write .glb, .gltf or .stl)", .path.display())]
+    ExportFormat { path: PathBuf },
+    /// A flag value that is not one of its choices.
+    #[error("{flag}: {value:?} is not one of {choices}")]
+    BadChoice {
+        flag: &'static str,
+        value: String,
+        choices: &'static str,
+    },
+    /// `export --unit` on a model whose format states no unit.
+    #[error(
+        "{}: the format states no length unit, so --unit cannot convert it (use --unit model)",
+        .path.display()
+    )]
+    UnitUnknown { path: PathBuf },
+    #[error(transparent)]
+    Stl(#[from] patchwork::io::stl_out::StlWriteError),
+    /// `render --ref`: the reference image cannot be used.
+    #[error("{}: reference image: {reason}", .path.display())]
+    Reference { path: PathBuf, reason: String },
     #[error("--up must not be the zero vector")]
     ZeroUp,
     #[error("--eye and --target must differ")]

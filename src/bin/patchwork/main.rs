@@ -7,6 +7,7 @@
 mod args;
 mod cmd;
 mod error;
+mod out;
 
 use std::process::ExitCode;
 
@@ -21,6 +22,13 @@ use clap::{Parser, Subcommand};
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Print nothing but errors (and --json output).
+    #[arg(short, long, global = true)]
+    quiet: bool,
+    /// Print the command's results as one JSON object on stdout (render, stats, check,
+    /// export, bench, implode).
+    #[arg(long, global = true)]
+    json: bool,
 }
 
 #[derive(Subcommand, Debug)]
@@ -49,8 +57,12 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    out::set(out::Mode {
+        quiet: cli.quiet,
+        json: cli.json,
+    });
     let passed = match &cli.command {
-        Command::Render(a) => cmd::render::run(a).map(|()| true),
+        Command::Render(a) => cmd::render::run(a),
         Command::Stats(a) => cmd::stats::run(a).map(|()| true),
         Command::Check(a) => cmd::check::run(a),
         Command::Export(a) => cmd::export::run(a).map(|()| true),

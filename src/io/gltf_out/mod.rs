@@ -14,8 +14,9 @@
 //! - one material per distinct colour: metallic-roughness with `baseColorFactor` = the colour,
 //!   metallic 0, roughness [`ROUGHNESS`], double-sided (CAD faces are drawn from both sides),
 //!   `alphaMode` `BLEND` when alpha < 1;
-//! - one node per placed instance, with its `matrix` (omitted when it is the identity), and one
-//!   scene, the default, listing all nodes.
+//! - one node per placed instance, with its `matrix` (omitted when it is the identity), under
+//!   the groups of the assembly tree ([`ExportGroup`]: sub-assemblies, and a root that turns
+//!   the model's axes and unit into the file's), and one scene, the default, listing the roots.
 //!
 //! Guarantees: the input is validated before anything is written (indices in range, finite
 //! positions and matrices, colours in `0..=1`, …), so a file is either complete and valid or not
@@ -24,20 +25,18 @@
 //! normal becomes `(0, 0, 1)`, because glTF requires unit normals. Meshes without triangles are
 //! left out with the nodes that place them, and so are meshes no node places.
 //!
-//! Not done: node hierarchies (every node is a root), textures, texture coordinates, vertex
-//! colours, de-duplication of identical meshes, compression (Draco, meshopt), and `.gltf` text
-//! output with external buffers.
+//! `.gltf` text output with the buffer in a `.bin` file beside it: [`write_gltf`].
+//!
+//! Not done: textures, texture coordinates, vertex
+//! colours, de-duplication of identical meshes, compression (Draco, meshopt).
 
 use std::borrow::Cow;
-use std::collections::{BTreeMap, HashMap};
 use std::ffi::OsString;
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use glam::Vec3;
 use gltf::json;
-use json::validation::{Checked::Valid, USize64};
 
 /// The identity matrix, column-major, as in [`ExportNode::matrix`].
 pub const IDENTITY_MATRIX: [f32; 16] = [
@@ -80,9 +79,23 @@ pub struct ExportNode {
     pub name: String,
     /// Index into [`ExportScene::meshes`].
     pub mesh: usize,
-    /// Object → world transform, column-major (translation in elements 12..15). Must be finite
-    /// and affine (last row `0 0 0 1`), as glTF requires.
+    /// Object → parent transform, column-major (translation in elements 12..15). Must be
+    /// finite and affine (last row `0 0 0 1`), as glTF requires.
     pub matrix: [f32; 16],
+    /// Index into [`ExportScene::groups`] of the group holding the node; `None`: a root node.
+    pub parent: Option<usize>,
+}
+
+/// A node without a mesh that groups others: a sub-assembly of the tree, or the root that
+/// turns the model's axes and units into the file's.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExportGroup {
+    /// Name given to the glTF node (left out when empty).
+    pub name: String,
+    /// Group → parent transform, as [`ExportNode::matrix`].
+    pub matrix: [f32; 16],
+    /// Index of the parent group, which must come before this one; `None`: a root node.
+    pub parent: Option<usize>,
 }
 
 /// A tessellated assembly to export.
@@ -92,6 +105,8 @@ pub struct ExportScene {
     pub meshes: Vec<ExportMesh>,
     /// The placed instances; only meshes some node places are written.
     pub nodes: Vec<ExportNode>,
+    /// The tree above the nodes (every group is written, in this order, before the nodes).
+    pub groups: Vec<ExportGroup>,
     /// Written as `asset.generator` (left out when empty), e.g. `"patchwork 0.1.0"`.
     pub generator: String,
 }
@@ -150,6 +165,17 @@ pub enum GltfWriteError {
         path: PathBuf,
         node: usize,
         name: String,
+        reason: &'static str,
+    },
+
+    /// A node or group names a parent group that does not exist or (for a group) does not
+    /// come before it.
+    #[error("{}: {what} ({name:?}) has parent group {parent}, {reason}", .path.display())]
+    BadParent {
+        path: PathBuf,
+        what: String,
+        name: String,
+        parent: usize,
         reason: &'static str,
     },
 
@@ -236,6 +262,7 @@ impl GltfWriteError {
             | GltfWriteError::Empty { path }
             | GltfWriteError::MissingMesh { path, .. }
             | GltfWriteError::InvalidMatrix { path, .. }
+            | GltfWriteError::BadParent { path, .. }
             | GltfWriteError::PartialTriangle { path, .. }
             | GltfWriteError::IndexOutOfRange { path, .. }
             | GltfWriteError::NonFinitePosition { path, .. }
@@ -258,6 +285,60 @@ pub fn write_glb(path: &Path, scene: &ExportScene) -> Result<GltfStats, GltfWrit
         source,
     })?;
     Ok(stats)
+}
+
+/// Writes `scene` as a text glTF file at `path` (`NAME.gltf`) with its binary data in
+/// `NAME.bin` beside it (referred to by a relative URI), with the validation of [`write_glb`];
+/// each file is written atomically, the `.bin` first. [`GltfStats::bytes`] counts both.
+pub fn write_gltf(path: &Path, scene: &ExportScene) -> Result<GltfStats, GltfWriteError> {
+    let io = |source| GltfWriteError::Io {
+        path: path.to_owned(),
+        source,
+    };
+    let plan = plan(path, scene)?;
+    let (mut root, bin) = build(scene, &plan);
+    let bin_path = path.with_extension("bin");
+    let bin_name = bin_path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .ok_or_else(|| {
+            io(std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                "the path does not name a file",
+            ))
+        })?;
+    if let Some(buffer) = root.buffers.first_mut() {
+        buffer.uri = Some(uri_escape(&bin_name));
+    }
+    let json = json::serialize::to_vec_pretty(&root).map_err(|e| GltfWriteError::Encode {
+        path: path.to_owned(),
+        reason: e.to_string(),
+    })?;
+    write_atomic(&bin_path, &bin).map_err(|source| GltfWriteError::Io {
+        path: bin_path.clone(),
+        source,
+    })?;
+    write_atomic(path, &json).map_err(io)?;
+    Ok(GltfStats {
+        meshes: plan.meshes.len(),
+        nodes: plan.nodes.len(),
+        triangles: plan.triangles,
+        bytes: json.len() + bin.len(),
+    })
+}
+
+/// A file name as a relative URI reference: bytes other than unreserved ones
+/// (RFC 3986 §2.3) percent-encoded.
+fn uri_escape(name: &str) -> String {
+    let mut out = String::with_capacity(name.len());
+    for b in name.bytes() {
+        if b.is_ascii_alphanumeric() || b"-._~".contains(&b) {
+            out.push(b as char);
+        } else {
+            out.push_str(&format!("%{b:02X}"));
+        }
+    }
+    out
 }
 
 /// Encodes `scene` as the bytes of a binary glTF file, with the validation of [`write_glb`].
@@ -339,8 +420,38 @@ fn plan(path: &Path, scene: &ExportScene) -> Result<Plan, GltfWriteError> {
         check_mesh(path, i, mesh)?;
     }
 
+    for (i, group) in scene.groups.iter().enumerate() {
+        check_matrix(&group.matrix).map_err(|reason| GltfWriteError::InvalidMatrix {
+            path: path.to_owned(),
+            node: i,
+            name: format!("group {}", group.name),
+            reason,
+        })?;
+        if let Some(parent) = group.parent
+            && parent >= i
+        {
+            return Err(GltfWriteError::BadParent {
+                path: path.to_owned(),
+                what: format!("group {i}"),
+                name: group.name.clone(),
+                parent,
+                reason: "which does not come before it",
+            });
+        }
+    }
     let mut placed = vec![false; scene.meshes.len()];
     for (i, node) in scene.nodes.iter().enumerate() {
+        if let Some(parent) = node.parent
+            && parent >= scene.groups.len()
+        {
+            return Err(GltfWriteError::BadParent {
+                path: path.to_owned(),
+                what: format!("node {i}"),
+                name: node.name.clone(),
+                parent,
+                reason: "which does not exist",
+            });
+        }
         let invalid = |reason| GltfWriteError::InvalidMatrix {
             path: path.to_owned(),
             node: i,
@@ -356,18 +467,7 @@ fn plan(path: &Path, scene: &ExportScene) -> Result<Plan, GltfWriteError> {
                 meshes: scene.meshes.len(),
             });
         }
-        if !node.matrix.iter().all(|x| x.is_finite()) {
-            return Err(invalid("has a NaN or infinite element"));
-        }
-        let last_row = [
-            node.matrix[3],
-            node.matrix[7],
-            node.matrix[11],
-            node.matrix[15],
-        ];
-        if last_row != [0.0, 0.0, 0.0, 1.0] {
-            return Err(invalid("is not affine (its last row is not 0 0 0 1)"));
-        }
+        check_matrix(&node.matrix).map_err(invalid)?;
         placed[node.mesh] = true;
     }
 
@@ -413,6 +513,17 @@ fn plan(path: &Path, scene: &ExportScene) -> Result<Plan, GltfWriteError> {
         bin_len,
         triangles,
     })
+}
+
+/// Why `m` cannot be a glTF node matrix (finite and affine), if it cannot.
+fn check_matrix(m: &[f32; 16]) -> Result<(), &'static str> {
+    if !m.iter().all(|x| x.is_finite()) {
+        return Err("has a NaN or infinite element");
+    }
+    if [m[3], m[7], m[11], m[15]] != [0.0, 0.0, 0.0, 1.0] {
+        return Err("is not affine (its last row is not 0 0 0 1)");
+    }
+    Ok(())
 }
 
 /// Whether the binary data, or the number of glTF objects, is beyond what a GLB can hold.
@@ -482,235 +593,6 @@ fn check_mesh(path: &Path, i: usize, mesh: &ExportMesh) -> Result<(), GltfWriteE
     }
 }
 
-/// Builds the glTF JSON and the binary chunk for a validated [`Plan`].
-fn build(scene: &ExportScene, plan: &Plan) -> (json::Root, Vec<u8>) {
-    let mut root = json::Root {
-        asset: json::Asset {
-            generator: non_empty(&scene.generator),
-            ..Default::default()
-        },
-        ..Default::default()
-    };
-    // Reserves the capacity once; `plan` computed the exact size.
-    let mut bin = Vec::with_capacity(usize::try_from(plan.bin_len).unwrap_or(0));
-    let buffer = root.push(json::Buffer {
-        byte_length: USize64(plan.bin_len),
-        name: None,
-        uri: None,
-        extensions: None,
-        extras: Default::default(),
-    });
-    let mut materials: HashMap<[u32; 4], json::Index<json::Material>> = HashMap::new();
-
-    for &i in &plan.meshes {
-        let mesh = &scene.meshes[i];
-
-        let view = push_f32x3(&mut root, &mut bin, buffer, mesh.positions.iter().copied());
-        let (min, max) = bounds(&mesh.positions);
-        let positions = root.push(accessor_vec3(view, mesh.positions.len(), Some((min, max))));
-        let mut attributes = BTreeMap::new();
-        attributes.insert(Valid(json::mesh::Semantic::Positions), positions);
-
-        if !mesh.normals.is_empty() {
-            let unit = mesh.normals.iter().map(|&n| unit_normal(n));
-            let view = push_f32x3(&mut root, &mut bin, buffer, unit);
-            let normals = root.push(accessor_vec3(view, mesh.normals.len(), None));
-            attributes.insert(Valid(json::mesh::Semantic::Normals), normals);
-        }
-
-        let view = push_u32(&mut root, &mut bin, buffer, &mesh.indices);
-        let indices = root.push(json::Accessor {
-            buffer_view: Some(view),
-            byte_offset: None,
-            count: USize64::from(mesh.indices.len()),
-            component_type: Valid(json::accessor::GenericComponentType(
-                json::accessor::ComponentType::U32,
-            )),
-            extensions: None,
-            extras: Default::default(),
-            type_: Valid(json::accessor::Type::Scalar),
-            min: None,
-            max: None,
-            name: None,
-            normalized: false,
-            sparse: None,
-        });
-
-        let color = mesh.color.unwrap_or(DEFAULT_COLOR);
-        // `+ 0.0` turns -0.0 into 0.0, so that both share a material.
-        let key = color.map(|c| (c + 0.0).to_bits());
-        let material = *materials
-            .entry(key)
-            .or_insert_with(|| root.push(material(color)));
-
-        root.push(json::Mesh {
-            extensions: None,
-            extras: Default::default(),
-            name: non_empty(&mesh.name),
-            primitives: vec![json::mesh::Primitive {
-                attributes,
-                extensions: None,
-                extras: Default::default(),
-                indices: Some(indices),
-                material: Some(material),
-                mode: Valid(json::mesh::Mode::Triangles),
-                targets: None,
-            }],
-            weights: None,
-        });
-    }
-    debug_assert_eq!(bin.len() as u64, plan.bin_len);
-
-    let mut nodes = Vec::with_capacity(plan.nodes.len());
-    for &i in &plan.nodes {
-        let node = &scene.nodes[i];
-        let mesh = plan.mesh_out[node.mesh].map(json::Index::new);
-        nodes.push(root.push(json::Node {
-            mesh,
-            name: non_empty(&node.name),
-            matrix: (node.matrix != IDENTITY_MATRIX).then_some(node.matrix),
-            ..Default::default()
-        }));
-    }
-    let scene_index = root.push(json::Scene {
-        extensions: None,
-        extras: Default::default(),
-        name: None,
-        nodes,
-    });
-    root.scene = Some(scene_index);
-    (root, bin)
-}
-
-fn non_empty(s: &str) -> Option<String> {
-    (!s.is_empty()).then(|| s.to_owned())
-}
-
-/// Unit normal, or `+z` for a zero, tiny or non-finite one (glTF requires unit normals).
-fn unit_normal(n: [f32; 3]) -> Vec3 {
-    Vec3::from(n).try_normalize().unwrap_or(Vec3::Z)
-}
-
-/// Component-wise bounds of a non-empty point list (`plan` ensures the mesh has a vertex).
-fn bounds(points: &[[f32; 3]]) -> ([f32; 3], [f32; 3]) {
-    points.iter().fold(
-        ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]),
-        |(lo, hi), p| {
-            (
-                [lo[0].min(p[0]), lo[1].min(p[1]), lo[2].min(p[2])],
-                [hi[0].max(p[0]), hi[1].max(p[1]), hi[2].max(p[2])],
-            )
-        },
-    )
-}
-
-fn material(color: [f32; 4]) -> json::Material {
-    let [r, g, b, a] = color;
-    json::Material {
-        alpha_mode: Valid(if a < 1.0 {
-            json::material::AlphaMode::Blend
-        } else {
-            json::material::AlphaMode::Opaque
-        }),
-        double_sided: true,
-        name: Some(format!("rgba {r} {g} {b} {a}")),
-        pbr_metallic_roughness: json::material::PbrMetallicRoughness {
-            base_color_factor: json::material::PbrBaseColorFactor(color),
-            metallic_factor: json::material::StrengthFactor(0.0),
-            roughness_factor: json::material::StrengthFactor(ROUGHNESS),
-            ..Default::default()
-        },
-        ..Default::default()
-    }
-}
-
-fn accessor_vec3(
-    view: json::Index<json::buffer::View>,
-    count: usize,
-    bounds: Option<([f32; 3], [f32; 3])>,
-) -> json::Accessor {
-    let value = |v: [f32; 3]| json::Value::from(v.to_vec());
-    json::Accessor {
-        buffer_view: Some(view),
-        byte_offset: None,
-        count: USize64::from(count),
-        component_type: Valid(json::accessor::GenericComponentType(
-            json::accessor::ComponentType::F32,
-        )),
-        extensions: None,
-        extras: Default::default(),
-        type_: Valid(json::accessor::Type::Vec3),
-        min: bounds.map(|(lo, _)| value(lo)),
-        max: bounds.map(|(_, hi)| value(hi)),
-        name: None,
-        normalized: false,
-        sparse: None,
-    }
-}
-
-/// Appends little-endian `vec3<f32>` data as a vertex attribute buffer view.
-fn push_f32x3(
-    root: &mut json::Root,
-    bin: &mut Vec<u8>,
-    buffer: json::Index<json::Buffer>,
-    data: impl Iterator<Item = impl Into<[f32; 3]>>,
-) -> json::Index<json::buffer::View> {
-    let start = bin.len();
-    for v in data {
-        for c in v.into() {
-            bin.extend_from_slice(&c.to_le_bytes());
-        }
-    }
-    push_view(
-        root,
-        buffer,
-        start,
-        bin.len(),
-        json::buffer::Target::ArrayBuffer,
-    )
-}
-
-/// Appends little-endian `u32` indices as an index buffer view.
-fn push_u32(
-    root: &mut json::Root,
-    bin: &mut Vec<u8>,
-    buffer: json::Index<json::Buffer>,
-    data: &[u32],
-) -> json::Index<json::buffer::View> {
-    let start = bin.len();
-    for i in data {
-        bin.extend_from_slice(&i.to_le_bytes());
-    }
-    push_view(
-        root,
-        buffer,
-        start,
-        bin.len(),
-        json::buffer::Target::ElementArrayBuffer,
-    )
-}
-
-fn push_view(
-    root: &mut json::Root,
-    buffer: json::Index<json::Buffer>,
-    start: usize,
-    end: usize,
-    target: json::buffer::Target,
-) -> json::Index<json::buffer::View> {
-    // All data is made of 4-byte values, so every view starts 4-byte aligned.
-    debug_assert_eq!(start % 4, 0);
-    root.push(json::buffer::View {
-        buffer,
-        byte_length: USize64::from(end - start),
-        byte_offset: Some(USize64::from(start)),
-        byte_stride: None,
-        name: None,
-        target: Some(Valid(target)),
-        extensions: None,
-        extras: Default::default(),
-    })
-}
-
 /// Distinguishes temporary files of concurrent writes from one process.
 static TEMP_COUNTER: AtomicU64 = AtomicU64::new(0);
 
@@ -747,5 +629,7 @@ fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     result
 }
 
+mod build;
+use build::build;
 #[cfg(test)]
 mod tests;

@@ -2,7 +2,9 @@
 
 use super::*;
 
-use glam::{Mat4, Quat};
+use glam::{Mat4, Quat, Vec3};
+
+use super::build::bounds;
 
 /// A fresh, empty directory for one test.
 fn test_dir(tag: &str) -> PathBuf {
@@ -58,6 +60,7 @@ fn node(name: &str, mesh: usize, matrix: Mat4) -> ExportNode {
         name: name.into(),
         mesh,
         matrix: matrix.to_cols_array(),
+        parent: None,
     }
 }
 
@@ -83,6 +86,7 @@ fn assembly() -> ExportScene {
                 ),
             ),
         ],
+        groups: Vec::new(),
         generator: "patchwork test".into(),
     }
 }
@@ -511,4 +515,82 @@ fn failed_write_keeps_an_existing_file() {
 fn path_without_a_file_name_is_an_io_error() {
     let err = write_glb(Path::new("/"), &assembly()).expect_err("no file name");
     assert!(matches!(err, GltfWriteError::Io { .. }), "{err}");
+}
+
+/// A tree: the root group scales and turns, a sub-assembly group holds two nodes; the import
+/// sees the hierarchy and the composed world transforms.
+#[test]
+fn groups_become_the_node_hierarchy() {
+    let mut scene = assembly();
+    let turn = Mat4::from_scale(Vec3::splat(0.001))
+        * Mat4::from_rotation_x(-std::f32::consts::FRAC_PI_2);
+    scene.groups = vec![
+        ExportGroup {
+            name: "root".into(),
+            matrix: turn.to_cols_array(),
+            parent: None,
+        },
+        ExportGroup {
+            name: "sub".into(),
+            matrix: IDENTITY_MATRIX,
+            parent: Some(0),
+        },
+    ];
+    scene.nodes[0].parent = Some(0);
+    scene.nodes[1].parent = Some(1);
+    scene.nodes[2].parent = Some(1);
+    let bytes = to_glb_bytes(&scene).expect("encodes");
+    let doc = gltf::Gltf::from_slice(&bytes).expect("parses");
+    let roots: Vec<_> = doc.default_scene().expect("scene").nodes().collect();
+    assert_eq!(roots.len(), 1, "one root");
+    assert_eq!(roots[0].name(), Some("root"));
+    let kids: Vec<Option<&str>> = roots[0].children().map(|n| n.name()).collect();
+    assert_eq!(kids, vec![Some("sub"), Some("base")]);
+    let sub = roots[0].children().next().expect("sub");
+    let grandkids: Vec<Option<&str>> = sub.children().map(|n| n.name()).collect();
+    assert_eq!(grandkids, vec![Some("lid"), Some("flag")]);
+    // The lid's world transform: root · sub · lid.
+    let lid = sub.children().next().expect("lid");
+    let world = Mat4::from_cols_array_2d(&roots[0].transform().matrix())
+        * Mat4::from_cols_array_2d(&sub.transform().matrix())
+        * Mat4::from_cols_array_2d(&lid.transform().matrix());
+    let expected = turn * Mat4::from_cols_array(&scene.nodes[1].matrix);
+    assert!(world.abs_diff_eq(expected, 1e-6), "{world} vs {expected}");
+}
+
+/// Parents must exist and come first (no cycles).
+#[test]
+fn bad_parents_are_errors() {
+    let mut scene = assembly();
+    scene.nodes[0].parent = Some(0);
+    let e = to_glb_bytes(&scene).expect_err("no group 0");
+    assert!(matches!(e, GltfWriteError::BadParent { .. }), "{e}");
+    scene.nodes[0].parent = None;
+    scene.groups = vec![ExportGroup {
+        name: "loop".into(),
+        matrix: IDENTITY_MATRIX,
+        parent: Some(0),
+    }];
+    let e = to_glb_bytes(&scene).expect_err("own parent");
+    assert!(e.to_string().contains("does not come before it"), "{e}");
+}
+
+/// `.gltf` + `.bin`: the import (which reads the external buffer) sees what the GLB holds.
+#[test]
+fn text_gltf_with_a_bin_file_imports() {
+    let dir = test_dir("text-gltf");
+    let path = dir.join("my part.gltf");
+    let stats = write_gltf(&path, &assembly()).expect("writes");
+    assert!(dir.join("my part.bin").is_file());
+    let text = std::fs::read_to_string(&path).expect("json");
+    assert!(text.contains("\"uri\": \"my%20part.bin\""), "{text}");
+    let (doc, buffers, _) = gltf::import(&path).expect("imports");
+    assert_eq!(doc.meshes().count(), stats.meshes);
+    assert_eq!(doc.nodes().count(), stats.nodes);
+    let glb = gltf::Gltf::from_slice(&to_glb_bytes(&assembly()).expect("glb")).expect("glb");
+    assert_eq!(
+        buffers[0].len() as u64,
+        glb.buffers().next().expect("buffer").length() as u64
+    );
+    assert_eq!(entries(&dir), vec!["my part.bin", "my part.gltf"]);
 }

@@ -28,6 +28,7 @@ use crate::args::{
     BudgetArgs, PrimitivesArg, at_least, fov_y, lod_options, parse_size, pixel_error, positive_ms,
 };
 use crate::error::CliError;
+use crate::out::{data, note};
 
 #[derive(Args, Debug)]
 pub struct BenchArgs {
@@ -127,7 +128,7 @@ pub fn run(args: &BenchArgs) -> Result<bool, CliError> {
     if let Some(join) = args.strip_joins {
         renderer.strip_join = join;
     }
-    eprintln!("adapter: {}", renderer.gpu().describe());
+    note!("adapter: {}", renderer.gpu().describe());
     let opts = FlythroughOptions {
         frames,
         size: args.size,
@@ -151,7 +152,7 @@ pub fn run(args: &BenchArgs) -> Result<bool, CliError> {
         &args.plot,
         &plot(&records, args.budget.budget_ms, summary.jump_frame),
     )?;
-    println!(
+    data!(
         "fly-through of {} ({} patches), {} frames at {}x{}, budget {} ms, pixel error {}{}",
         file.display(),
         scene.patches.len(),
@@ -163,48 +164,54 @@ pub fn run(args: &BenchArgs) -> Result<bool, CliError> {
         args.target_ms
             .map_or(String::new(), |t| format!(", frame-rate target {t} ms"))
     );
-    println!("initial tessellation      {:.1} ms", summary.initial_ms);
-    println!(
+    data!("initial tessellation      {:.1} ms", summary.initial_ms);
+    data!(
         "initial upload            {:.1} ms, {}",
         summary.initial_upload_ms,
         mib(summary.initial_upload_bytes as f64)
     );
-    println!(
+    data!(
         "frame time                p50 {:.2} ms, p99 {:.2} ms",
-        summary.p50_frame_ms, summary.p99_frame_ms
+        summary.p50_frame_ms,
+        summary.p99_frame_ms
     );
-    println!(
+    data!(
         "CPU time per frame        p50 {:.2} ms, p99 {:.2} ms (frame less the GPU wait)",
-        summary.p50_cpu_ms, summary.p99_cpu_ms
+        summary.p50_cpu_ms,
+        summary.p99_cpu_ms
     );
-    println!(
+    data!(
         "uploaded per frame        mean {}, max {}",
         mib(summary.mean_uploaded_bytes),
         mib(summary.max_uploaded_bytes as f64)
     );
-    println!(
+    data!(
         "re-tessellation per frame p99 {:.2} ms (budget {} ms)",
-        summary.p99_tessellation_ms, args.budget.budget_ms
+        summary.p99_tessellation_ms,
+        args.budget.budget_ms
     );
     match (summary.converge_ms, summary.converge_frames) {
-        (Some(ms), Some(f)) => println!(
+        (Some(ms), Some(f)) => data!(
             "after the jump (frame {}) every visible patch is within the pixel error in {:.0} ms ({f} frames)",
-            summary.jump_frame, ms
+            summary.jump_frame,
+            ms
         ),
-        _ => println!(
+        _ => data!(
             "after the jump (frame {}) the visible patches never got within the pixel error",
             summary.jump_frame
         ),
     }
     if let (Some(t), Some(s)) = (args.target_ms, TargetSummary::of(&records)) {
-        println!(
+        data!(
             "frame-rate target         {t} ms: achieved mean {:.2} ms (second half {:.2} ms at pixel error {:.2} on average)",
-            s.mean_ms, s.tail_mean_ms, s.tail_pixel_error
+            s.mean_ms,
+            s.tail_mean_ms,
+            s.tail_pixel_error
         );
     }
     let inst = summary.instancing;
     if inst.shared_patches > 0 {
-        println!(
+        data!(
             "instanced parts           {} of {} patches share a surface with another placement: {} tessellations made for them, {} saved",
             inst.shared_patches,
             scene.patches.len(),
@@ -214,9 +221,9 @@ pub fn run(args: &BenchArgs) -> Result<bool, CliError> {
     }
     let crack_free = summary.max_crack_pixels.is_none_or(|m| m == 0);
     if let (Some(max), Some(total)) = (summary.max_crack_pixels, summary.total_crack_pixels) {
-        println!("crack pixels              {total} in all, at most {max} in a frame");
+        data!("crack pixels              {total} in all, at most {max} in a frame");
     }
-    println!("wrote {} and {}", csv.display(), args.plot.display());
+    data!("wrote {} and {}", csv.display(), args.plot.display());
     Ok(crack_free)
 }
 
@@ -254,7 +261,7 @@ fn run_scale(args: &BenchArgs) -> Result<bool, CliError> {
         pb.inc(1);
         match point {
             Ok(p) => {
-                pb.suspend(|| eprintln!("{}", scale_report::csv_row(&p)));
+                pb.suspend(|| note!("{}", scale_report::csv_row(&p)));
                 points.push(p);
             }
             Err(e) => {
@@ -265,14 +272,17 @@ fn run_scale(args: &BenchArgs) -> Result<bool, CliError> {
     }
     pb.finish_and_clear();
     let _ = std::fs::remove_dir_all(&work_dir);
-    println!(
+    data!(
         "scale sweep: {frames} frames per point at {}x{}, pixel error {}, budget {} ms; each point in its own process",
-        args.size.0, args.size.1, args.pixel_error, args.budget.budget_ms
+        args.size.0,
+        args.size.1,
+        args.pixel_error,
+        args.budget.budget_ms
     );
     print!("{}", scale_report::markdown(&points));
     if let Some(csv) = &args.csv {
         png::write_text(csv, &scale_report::csv(&points))?;
-        println!("wrote {}", csv.display());
+        data!("wrote {}", csv.display());
     }
     Ok(failed == 0)
 }

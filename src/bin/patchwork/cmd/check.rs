@@ -12,6 +12,7 @@ use patchwork::view;
 use super::{load_built, progress};
 use crate::args::{PrimitivesArg, at_least, fov_y, parse_size, pixel_error};
 use crate::error::CliError;
+use crate::out::{data, note};
 
 #[derive(Args, Debug)]
 pub struct CheckArgs {
@@ -55,7 +56,7 @@ pub fn run(args: &CheckArgs) -> Result<bool, CliError> {
     let scene = load_built(&args.file, &args.cache)?;
     let mut renderer = Renderer::new()?;
     renderer.primitives = args.primitives.primitives;
-    eprintln!("adapter: {}", renderer.gpu().describe());
+    note!("adapter: {}", renderer.gpu().describe());
     if let Some(dir) = &args.save_failures {
         std::fs::create_dir_all(dir).map_err(|source| CliError::Io {
             path: dir.clone(),
@@ -79,7 +80,7 @@ pub fn run(args: &CheckArgs) -> Result<bool, CliError> {
         .iter()
         .map(|v| format!("cracks fb={:<3}", v.name()))
         .collect();
-    println!(
+    data!(
         "{:>4}  {:>9}  {:>8}  {}  {:>10}",
         "view",
         "triangles",
@@ -100,7 +101,7 @@ pub fn run(args: &CheckArgs) -> Result<bool, CliError> {
             .map(|(_, c)| c.growth)
             .unwrap_or(0);
         pb.suspend(|| {
-            println!(
+            data!(
                 "{:>4}  {:>9}  {:>8}  {}  {:>10}",
                 r.index,
                 r.stats.triangles,
@@ -112,14 +113,17 @@ pub fn run(args: &CheckArgs) -> Result<bool, CliError> {
         pb.inc(1);
     })?;
     pb.finish_and_clear();
-    println!();
-    println!(
+    data!();
+    data!(
         "summary over {} views at {} px pixel error, {}x{}:",
-        views, pixel_error, args.size.0, args.size.1
+        views,
+        pixel_error,
+        args.size.0,
+        args.size.1
     );
     for v in &variants {
         let t = report.total(*v);
-        println!(
+        data!(
             "  fat borders {:<3}  crack pixels {:>7} (background {}, surface behind {}), growth pixels {} (max {} px out), of {} inside pixels",
             v.name(),
             t.cracks(),
@@ -133,7 +137,7 @@ pub fn run(args: &CheckArgs) -> Result<bool, CliError> {
     if let Some(f) = args.narrowed_width {
         for v in variants.iter().filter(|v| **v != FatBorders::Off) {
             let t = report.total_narrowed(*v);
-            println!(
+            data!(
                 "  fat borders {:<3} × {f}  crack pixels {:>7} (background {}, surface behind {}), growth pixels {}",
                 v.name(),
                 t.cracks(),
@@ -144,7 +148,7 @@ pub fn run(args: &CheckArgs) -> Result<bool, CliError> {
         }
     }
     let ok = report.crack_free();
-    println!(
+    data!(
         "{}",
         if ok {
             "OK: no crack pixel with fat borders"

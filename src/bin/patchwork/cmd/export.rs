@@ -1,17 +1,21 @@
 //! `patchwork export`: the tessellation as binary glTF (assembled by
 //! `patchwork::export::assemble`, written by `io::gltf_out::write_glb`).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use clap::Args;
+use serde_json::json;
 
-use patchwork::export::{ExportOptions, Tolerance, assemble};
-use patchwork::io::gltf_out::write_glb;
+use patchwork::export::{ExportOptions, Tolerance, assemble, metres_per_unit};
+use patchwork::io::gltf_out::{write_glb, write_gltf};
+use patchwork::io::stl_out::write_stl;
+use patchwork::model::{Scene, UpAxis};
 use patchwork::view;
 
 use super::load_built;
 use crate::args::pixel_error;
 use crate::error::CliError;
+use crate::out::{self, data};
 
 #[derive(Args, Debug)]
 pub struct ExportArgs {
@@ -19,9 +23,19 @@ pub struct ExportArgs {
     file: PathBuf,
     #[command(flatten)]
     cache: crate::args::CacheArgs,
-    /// Output .glb file.
+    /// Output file, its format by extension: .glb (binary glTF), .gltf (text glTF with a .bin
+    /// beside it) or .stl (binary STL).
     #[arg(short, long)]
     output: PathBuf,
+    /// Unit of the file's coordinates: m, cm, mm, in, ft, or `model` (the model's own numbers).
+    /// Default: metres for glTF (as the glTF specification says), millimetres for STL; a
+    /// model whose format states no unit (.bpt, OBJ, PLY, STL) is written in its own numbers.
+    #[arg(long)]
+    unit: Option<String>,
+    /// The file's up axis: y, z, or `model` (the model's own axes). Default: y for glTF (as its
+    /// specification says), z for STL.
+    #[arg(long)]
+    up: Option<String>,
     /// Tessellate for the default view at this screen-space error (pixels, 1024x768).
     #[arg(long, default_value_t = view::DEFAULT_PIXEL_ERROR, conflicts_with = "tolerance")]
     pixel_error: f64,
@@ -47,21 +61,127 @@ impl ExportArgs {
     }
 }
 
+/// The output formats, by extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Format {
+    Glb,
+    Gltf,
+    Stl,
+}
+
+impl Format {
+    fn of(path: &Path) -> Result<Format, CliError> {
+        let ext = path
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase())
+            .unwrap_or_default();
+        match ext.as_str() {
+            "glb" => Ok(Format::Glb),
+            "gltf" => Ok(Format::Gltf),
+            "stl" => Ok(Format::Stl),
+            _ => Err(CliError::ExportFormat {
+                path: path.to_owned(),
+            }),
+        }
+    }
+}
+
+/// The file's up axis and unit scale from the flags and the format's conventions.
+fn frame(
+    args: &ExportArgs,
+    format: Format,
+    scene: &Scene,
+) -> Result<(Option<UpAxis>, f64, String), CliError> {
+    let up = match (args.up.as_deref(), format) {
+        (Some("y" | "Y"), _) | (None, Format::Glb | Format::Gltf) => Some(UpAxis::Y),
+        (Some("z" | "Z"), _) | (None, Format::Stl) => Some(UpAxis::Z),
+        (Some("model"), _) => None,
+        (Some(other), _) => {
+            return Err(CliError::BadChoice {
+                flag: "--up",
+                value: other.to_owned(),
+                choices: "y, z or model",
+            });
+        }
+    };
+    let asked = args.unit.as_deref().unwrap_or(match format {
+        Format::Glb | Format::Gltf => "m",
+        Format::Stl => "mm",
+    });
+    if asked == "model" {
+        return Ok((up, 1.0, scene.unit.unwrap_or("model units").to_owned()));
+    }
+    let target = metres_per_unit(asked).ok_or_else(|| CliError::BadChoice {
+        flag: "--unit",
+        value: asked.to_owned(),
+        choices: "m, cm, mm, in, ft or model",
+    })?;
+    match scene.unit.and_then(metres_per_unit) {
+        Some(model) => Ok((up, model / target, asked.to_owned())),
+        None if args.unit.is_some() => Err(CliError::UnitUnknown {
+            path: args.file.clone(),
+        }),
+        // The format states no unit: its numbers are written as they are.
+        None => Ok((up, 1.0, "model units".to_owned())),
+    }
+}
+
 pub fn run(args: &ExportArgs) -> Result<(), CliError> {
+    let format = Format::of(&args.output)?;
+    let tolerance = args.tolerance()?;
     let scene = load_built(&args.file, &args.cache)?;
+    let (up, scale, unit) = frame(args, format, &scene)?;
     let opts = ExportOptions {
-        tolerance: args.tolerance()?,
+        tolerance,
+        up,
+        scale,
+        root_name: args
+            .file
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default(),
         ..ExportOptions::default()
     };
     let doc = assemble(&scene, &opts)?;
-    let stats = write_glb(&args.output, &doc)?;
-    eprintln!(
-        "{}: {} meshes, {} nodes, {} triangles, {} bytes",
+    let (meshes, nodes, triangles, bytes) = match format {
+        Format::Glb | Format::Gltf => {
+            let stats = if format == Format::Glb {
+                write_glb(&args.output, &doc)?
+            } else {
+                write_gltf(&args.output, &doc)?
+            };
+            (stats.meshes, stats.nodes, stats.triangles, stats.bytes)
+        }
+        Format::Stl => {
+            let stats = write_stl(&args.output, &doc)?;
+            (
+                doc.meshes.len(),
+                doc.nodes.len(),
+                stats.triangles,
+                stats.bytes,
+            )
+        }
+    };
+    let up_name = match up {
+        Some(UpAxis::Y) => "y",
+        Some(UpAxis::Z) => "z",
+        None => "the model's",
+    };
+    out::emit(&json!({
+        "output": args.output.display().to_string(),
+        "meshes": meshes,
+        "nodes": nodes,
+        "groups": doc.groups.len(),
+        "triangles": triangles,
+        "bytes": bytes,
+        "unit": unit,
+        "up": up_name,
+    }));
+    data!(
+        "{}: {meshes} meshes, {nodes} nodes, {} groups, {triangles} triangles, {bytes} bytes; \
+         {unit}, {up_name} up",
         args.output.display(),
-        stats.meshes,
-        stats.nodes,
-        stats.triangles,
-        stats.bytes
+        doc.groups.len(),
     );
     Ok(())
 }

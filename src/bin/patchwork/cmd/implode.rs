@@ -18,6 +18,7 @@ use patchwork::report::implode::{CrackSummary, FrameTimes, write_frames_csv};
 use super::{load_built, progress};
 use crate::args::{BudgetArgs, CameraArgs, DrawArgs, at_least, distance, lod_options};
 use crate::error::CliError;
+use crate::out::{data, note};
 
 #[derive(Args, Debug)]
 pub struct ImplodeArgs {
@@ -105,7 +106,7 @@ pub fn run(args: &ImplodeArgs) -> Result<bool, CliError> {
     create_dir(&args.output)?;
     let mut renderer = Renderer::new()?;
     renderer.primitives = args.draw.primitives.primitives;
-    eprintln!("adapter: {}", renderer.gpu().describe());
+    note!("adapter: {}", renderer.gpu().describe());
     let opts = AnimOptions {
         frames,
         explode: args.explode,
@@ -158,7 +159,7 @@ pub fn run(args: &ImplodeArgs) -> Result<bool, CliError> {
     };
     write_frames_csv(&args.output.join("frames.csv"), &records)?;
     let times = FrameTimes::of(&records);
-    println!(
+    data!(
         "{name} of {} by {:?}: {} groups, {} frames at {}x{} — {:.1} frames per second (mean {:.1} ms, p50 {:.1} ms, max {:.1} ms per frame: frame loop, upload, draw; PNG writing not counted)",
         args.file.display(),
         args.by,
@@ -171,7 +172,7 @@ pub fn run(args: &ImplodeArgs) -> Result<bool, CliError> {
         times.p50_ms,
         times.max_ms
     );
-    println!(
+    data!(
         "wrote {}/frame-0000.png … frame-{:04}.png{}{}",
         args.output.display(),
         records.len().saturating_sub(1),
@@ -193,13 +194,17 @@ pub fn run(args: &ImplodeArgs) -> Result<bool, CliError> {
         .map_or(String::new(), |first| {
             growth_within_bound(&first, args.by, explosion.groups, pe).0
         });
-    println!(
+    data!(
         "crack pixels: {} in all frames, {} frames with any, {} in the last frame; growth at most {} pixels a frame, at most {} px out (bound {bound})",
-        c.cracks, c.frames_with_cracks, c.last, c.most_growth, c.worst_growth_px,
+        c.cracks,
+        c.frames_with_cracks,
+        c.last,
+        c.most_growth,
+        c.worst_growth_px,
     );
     let ok = frames_pass(&records, args.by, explosion.groups, pe);
     if !ok {
-        eprintln!(
+        note!(
             "check failed: {}",
             match args.by {
                 GroupBy::Parts =>
@@ -223,7 +228,7 @@ fn write_mp4(dir: &Path, name: &str, fps: u32) -> Result<Option<PathBuf>, CliErr
         .status()
         .is_ok_and(|s| s.success());
     if !found {
-        eprintln!("note: no ffmpeg on the PATH, so no MP4 (the PNGs and the GIF are written)");
+        note!("note: no ffmpeg on the PATH, so no MP4 (the PNGs and the GIF are written)");
         return Ok(None);
     }
     let out = dir.join(format!("{name}.mp4"));

@@ -20,6 +20,7 @@ use patchwork::tessellate::PatchMesh;
 
 use crate::args::CacheArgs;
 use crate::error::CliError;
+use crate::out::note;
 
 /// Loads a model as `options` say and tells the user (stderr) what was left out and why, and
 /// what went wrong with the hierarchy cache.
@@ -27,16 +28,16 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Loaded, CliError> {
     let loaded = patchwork::prep::load_with_options(path, options, &Bar::default())?;
     let scene = &loaded.scene;
     for w in scene.warnings.iter().chain(&loaded.warnings) {
-        eprintln!("warning: {}: {w}", path.display());
+        note!("warning: {}: {w}", path.display());
     }
     if !scene.skipped.is_empty() {
-        eprintln!(
+        note!(
             "warning: {}: {} face(s) skipped:",
             path.display(),
             scene.skipped.len()
         );
         for s in &scene.skipped {
-            eprintln!("  face #{}: {}", s.face, s.reason);
+            note!("  face #{}: {}", s.face, s.reason);
         }
     }
     Ok(loaded)
@@ -51,18 +52,21 @@ pub fn load_built(path: &Path, cache: &CacheArgs) -> Result<Scene, CliError> {
 pub fn report_failures(meshes: &[PatchMesh]) {
     let failed: Vec<&str> = meshes.iter().filter_map(|m| m.failure.as_deref()).collect();
     if !failed.is_empty() {
-        eprintln!(
+        note!(
             "warning: {} patch(es) could not be tessellated:",
             failed.len()
         );
         for f in failed.iter().take(10) {
-            eprintln!("  {f}");
+            note!("  {f}");
         }
     }
 }
 
 /// A progress bar over `n` `what`s (views, frames) on stderr.
 pub fn progress(n: usize, what: &str) -> ProgressBar {
+    if !crate::out::diagnostics() {
+        return ProgressBar::hidden();
+    }
     let pb = ProgressBar::new(n as u64);
     pb.set_style(
         ProgressStyle::with_template(&format!("{{bar:40}} {{pos}}/{{len}} {what} {{elapsed}}"))

@@ -7,13 +7,17 @@ use std::time::Instant;
 use clap::Args;
 use glam::DVec3;
 
-use patchwork::check::fidelity::measure_meshes;
-use patchwork::model::{Scene, bounding_box};
+use serde_json::{Value, json};
+
+use patchwork::check::fidelity::{FaceFidelity, measure_meshes};
+use patchwork::model::{Scene, UpAxis, bounding_box};
 use patchwork::tessellate::{MeshStats, PatchMesh, tessellate_scene};
+use patchwork::view::View;
 
 use super::load_built;
-use crate::args::CameraArgs;
+use crate::args::{Camera, CameraArgs};
 use crate::error::CliError;
+use crate::out::{self, data};
 
 #[derive(Args, Debug)]
 pub struct StatsArgs {
@@ -42,35 +46,64 @@ pub fn run(args: &StatsArgs) -> Result<(), CliError> {
     let meshes = tessellate_scene(&scene, &view, camera.pixel_error);
     let dt = t0.elapsed();
     let s = MeshStats::of(&meshes);
-    println!("file              {}", args.file.display());
-    println!("load              {load_ms:.0} ms");
-    println!("patches           {}", s.patches);
-    println!("triangles         {}", s.triangles);
-    println!("vertices          {}", s.vertices);
-    println!("border vertices   {}", s.border_vertices);
-    println!("pixel error       {} px", camera.pixel_error);
-    println!(
-        "eps range         {:.3e} .. {:.3e} (object units)",
-        s.eps_min, s.eps_max
+    let faces = measure_meshes(&scene, &meshes);
+    if out::json() {
+        out::emit(&json_report(
+            args, &scene, &view, &camera, &s, &faces, &meshes, load_ms, dt,
+        ));
+        return Ok(());
+    }
+    data!("file              {}", args.file.display());
+    data!("load              {load_ms:.0} ms");
+    let (lo, hi) = scene.bbox;
+    let unit = scene.unit.unwrap_or("model units (the format states none)");
+    data!(
+        "bounding box      [{:.4}, {:.4}, {:.4}] .. [{:.4}, {:.4}, {:.4}] {unit}",
+        lo.x,
+        lo.y,
+        lo.z,
+        hi.x,
+        hi.y,
+        hi.z
     );
-    println!(
+    let (c, size) = ((lo + hi) * 0.5, hi - lo);
+    data!("centre            {:.4}, {:.4}, {:.4}", c.x, c.y, c.z);
+    data!(
+        "size              {:.4} x {:.4} x {:.4} (diagonal {:.4})",
+        size.x,
+        size.y,
+        size.z,
+        scene.bbox_diagonal()
+    );
+    data!("up axis           {}", up_name(scene.up));
+    data!("patches           {}", s.patches);
+    data!("triangles         {}", s.triangles);
+    data!("vertices          {}", s.vertices);
+    data!("border vertices   {}", s.border_vertices);
+    data!("pixel error       {} px", camera.pixel_error);
+    data!(
+        "eps range         {:.3e} .. {:.3e} (object units)",
+        s.eps_min,
+        s.eps_max
+    );
+    data!(
         "worst error/eps   {:.3} (the tessellator's own samples)",
         s.worst_error_ratio
     );
-    let faces = measure_meshes(&scene, &meshes);
     if !faces.is_empty() {
-        let samples: usize = faces.iter().map(|f| f.1.samples).sum();
-        let outside: usize = faces.iter().map(|f| f.1.outside).sum();
-        let face_samples: usize = faces.iter().map(|f| f.1.face_samples).sum();
-        let uncovered: usize = faces.iter().map(|f| f.1.uncovered).sum();
-        println!(
-            "trimmed error/eps {:.3} (against the trimmed faces, {samples} samples; {outside} \
-             outside their trim by more than eps; {face_samples} face samples, {uncovered} \
+        let t = Trimmed::of(&faces);
+        data!(
+            "trimmed error/eps {:.3} (against the trimmed faces, {} samples; {} \
+             outside their trim by more than eps; {} face samples, {} \
              farther than eps from the mesh)",
-            faces[0].1.ratio()
+            faces[0].1.ratio(),
+            t.samples,
+            t.outside,
+            t.face_samples,
+            t.uncovered
         );
         for (patch, f) in faces.iter().take(args.faces) {
-            println!(
+            data!(
                 "  face #{:<8} {:<9} error/eps {:>7.3}  outside {:>5}  missing/eps {:>7.3}  \
                  patch {patch}",
                 f.face,
@@ -81,34 +114,152 @@ pub fn run(args: &StatsArgs) -> Result<(), CliError> {
             );
         }
     }
-    println!(
+    data!(
         "placed solids     {} ({} parts)",
         scene.instances.len(),
         scene.parts.len()
     );
     if !scene.skipped.is_empty() {
-        println!("skipped faces     {}", scene.skipped.len());
+        data!("skipped faces     {}", scene.skipped.len());
         for f in scene.skipped.iter().take(10) {
-            println!("  face #{}: {}", f.face, f.reason);
+            data!("  face #{}: {}", f.face, f.reason);
         }
         if scene.skipped.len() > 10 {
-            println!("  …");
+            data!("  …");
         }
     }
-    println!(
+    data!(
         "tessellation      {:.2} ms ({} threads)",
         dt.as_secs_f64() * 1e3,
         rayon::current_num_threads()
     );
-    println!(
+    data!(
         "eye               {:.3},{:.3},{:.3}",
-        view.eye.x, view.eye.y, view.eye.z
+        view.eye.x,
+        view.eye.y,
+        view.eye.z
     );
-    print_memory(&scene, &s);
-    if args.parts {
-        print_parts(&scene, &meshes);
+    if out::text() {
+        print_memory(&scene, &s);
+        if args.parts {
+            print_parts(&scene, &meshes);
+        }
     }
     Ok(())
+}
+
+fn up_name(up: UpAxis) -> &'static str {
+    match up {
+        UpAxis::Y => "+y",
+        UpAxis::Z => "+z",
+    }
+}
+
+/// Totals of the trimmed-face fidelity measure.
+struct Trimmed {
+    samples: usize,
+    outside: usize,
+    face_samples: usize,
+    uncovered: usize,
+}
+
+impl Trimmed {
+    fn of(faces: &[(u32, FaceFidelity)]) -> Trimmed {
+        Trimmed {
+            samples: faces.iter().map(|f| f.1.samples).sum(),
+            outside: faces.iter().map(|f| f.1.outside).sum(),
+            face_samples: faces.iter().map(|f| f.1.face_samples).sum(),
+            uncovered: faces.iter().map(|f| f.1.uncovered).sum(),
+        }
+    }
+}
+
+fn vec3(v: DVec3) -> Value {
+    json!([v.x, v.y, v.z])
+}
+
+/// Everything the text report says, as one JSON object (`stats --json`).
+#[allow(clippy::too_many_arguments)]
+fn json_report(
+    args: &StatsArgs,
+    scene: &Scene,
+    view: &View,
+    camera: &Camera,
+    s: &MeshStats,
+    faces: &[(u32, FaceFidelity)],
+    meshes: &[PatchMesh],
+    load_ms: f64,
+    dt: std::time::Duration,
+) -> Value {
+    let (lo, hi) = scene.bbox;
+    let trimmed = (!faces.is_empty()).then(|| {
+        let t = Trimmed::of(faces);
+        json!({
+            "error_ratio": faces[0].1.ratio(),
+            "samples": t.samples,
+            "outside": t.outside,
+            "face_samples": t.face_samples,
+            "uncovered": t.uncovered,
+            "worst_faces": faces.iter().take(args.faces).map(|(patch, f)| json!({
+                "face": f.face,
+                "surface": f.surface,
+                "error_ratio": f.ratio(),
+                "outside": f.outside,
+                "missing_ratio": f.missing / f.eps.max(f64::MIN_POSITIVE),
+                "patch": patch,
+            })).collect::<Vec<_>>(),
+        })
+    });
+    let m = scene.memory();
+    let mut report = json!({
+        "file": args.file.display().to_string(),
+        "load_ms": load_ms,
+        "bbox": { "min": vec3(lo), "max": vec3(hi) },
+        "centre": vec3((lo + hi) * 0.5),
+        "size": vec3(hi - lo),
+        "diagonal": scene.bbox_diagonal(),
+        "up": up_name(scene.up),
+        "unit": scene.unit,
+        "patches": s.patches,
+        "triangles": s.triangles,
+        "vertices": s.vertices,
+        "border_vertices": s.border_vertices,
+        "pixel_error": camera.pixel_error,
+        "eps_min": s.eps_min,
+        "eps_max": s.eps_max,
+        "worst_error_ratio": s.worst_error_ratio,
+        "trimmed": trimmed,
+        "instances": scene.instances.len(),
+        "parts": scene.parts.len(),
+        "skipped_faces": scene.skipped.iter()
+            .map(|f| json!({ "face": f.face, "reason": f.reason }))
+            .collect::<Vec<_>>(),
+        "tessellation_ms": dt.as_secs_f64() * 1e3,
+        "threads": rayon::current_num_threads(),
+        "eye": vec3(view.eye),
+        "target": vec3(view.target),
+        "memory": {
+            "scene_bytes": m.total(),
+            "mesh_bytes": s.bytes,
+            "peak_rss_bytes": patchwork::util::peak_rss_bytes(),
+        },
+    });
+    if args.parts {
+        report["instance_list"] = instance_boxes(scene, meshes)
+            .into_iter()
+            .zip(&scene.instances)
+            .map(|(bbox, inst)| {
+                json!({
+                    "name": inst.name,
+                    "part": scene.parts.get(inst.part as usize).map(|p| p.name.as_str()),
+                    "shell": inst.shell,
+                    "translation": vec3(inst.transform.w_axis.truncate()),
+                    "bbox": bbox.map(|(lo, hi)| json!({ "min": vec3(lo), "max": vec3(hi) })),
+                })
+            })
+            .collect();
+    }
+    report
 }
 
 /// Memory: the scene's and the tessellation's own accounting (capacities; see
@@ -141,9 +292,8 @@ fn print_memory(scene: &Scene, meshes: &MeshStats) {
     }
 }
 
-/// The placed solids / shells: index, part, occurrence path, shell, translation, world box
-/// (of the tessellation).
-fn print_parts(scene: &Scene, meshes: &[PatchMesh]) {
+/// World box of each instance's tessellation (`None`: no faces).
+fn instance_boxes(scene: &Scene, meshes: &[PatchMesh]) -> Vec<Option<(DVec3, DVec3)>> {
     let mut boxes: Vec<Option<(DVec3, DVec3)>> = vec![None; scene.instances.len()];
     for (p, m) in scene.patches.iter().zip(meshes) {
         let Some(b) = bounding_box(m.positions.iter().map(|v| v.as_dvec3())) else {
@@ -156,6 +306,13 @@ fn print_parts(scene: &Scene, meshes: &[PatchMesh]) {
             });
         }
     }
+    boxes
+}
+
+/// The placed solids / shells: index, part, occurrence path, shell, translation, world box
+/// (of the tessellation).
+fn print_parts(scene: &Scene, meshes: &[PatchMesh]) {
+    let boxes = instance_boxes(scene, meshes);
     println!("instances         (index, part, occurrence, shell, translation, world box)");
     for (i, inst) in scene.instances.iter().enumerate() {
         let part = scene

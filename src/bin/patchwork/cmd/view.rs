@@ -5,14 +5,12 @@ use std::path::PathBuf;
 use clap::Args;
 
 use patchwork::anim::GroupBy;
-use patchwork::view;
 use patchwork::viewer::{ViewerAnimation, ViewerOptions, script_key};
 
 use super::load;
-use crate::args::{
-    BudgetArgs, PrimitivesArg, at_least, distance, fov_y, lod_options, parse_size, pixel_error,
-};
+use crate::args::{BudgetArgs, CameraArgs, PrimitivesArg, at_least, distance, lod_options};
 use crate::error::CliError;
+use crate::out::note;
 
 #[derive(Args, Debug)]
 pub struct ViewArgs {
@@ -20,15 +18,9 @@ pub struct ViewArgs {
     file: PathBuf,
     #[command(flatten)]
     cache: crate::args::CacheArgs,
-    /// Window size.
-    #[arg(long, default_value = "1024x768", value_parser = parse_size)]
-    size: (u32, u32),
-    /// Vertical field of view in degrees.
-    #[arg(long, default_value_t = view::DEFAULT_FOV_Y_DEG)]
-    fov: f64,
-    /// Pixel error at start (`+`/`-` change it).
-    #[arg(long, default_value_t = view::DEFAULT_PIXEL_ERROR)]
-    pixel_error: f64,
+    /// The starting camera, window size (--size) and pixel error (`+`/`-` change it).
+    #[command(flatten)]
+    camera: CameraArgs,
     #[command(flatten)]
     budget: BudgetArgs,
     /// Scripted run: draw this many frames, then exit.
@@ -59,8 +51,7 @@ pub struct ViewArgs {
 }
 
 pub fn run(args: &ViewArgs) -> Result<(), CliError> {
-    let fov_y = fov_y(args.fov)?;
-    let pixel_error = pixel_error(args.pixel_error)?;
+    let camera = args.camera.validate()?;
     let budget = args.budget.validate()?;
     let frames = args
         .frames
@@ -95,9 +86,9 @@ pub fn run(args: &ViewArgs) -> Result<(), CliError> {
             let t = std::time::Instant::now();
             let built = pending.build(&start, &patchwork::prep::NoProgress);
             for w in &built.warnings {
-                eprintln!("warning: {}: {w}", file.display());
+                note!("warning: {}: {w}", file.display());
             }
-            eprintln!(
+            note!(
                 "{}: hierarchies built in {:.2} s",
                 file.display(),
                 t.elapsed().as_secs_f64()
@@ -115,9 +106,13 @@ pub fn run(args: &ViewArgs) -> Result<(), CliError> {
         scene,
         ViewerOptions {
             title,
-            size: args.size,
-            fov_y,
-            lod: lod_options(pixel_error, budget),
+            size: camera.size,
+            fov_y: camera.fov_y,
+            framing: camera.framing,
+            eye: camera.eye,
+            target: camera.target,
+            up: camera.up,
+            lod: lod_options(camera.pixel_error, budget),
             frames,
             screenshot: args.screenshot.clone(),
             keys: args.keys.clone(),
@@ -127,13 +122,15 @@ pub fn run(args: &ViewArgs) -> Result<(), CliError> {
                 frames: args.implode_frames.max(2),
             }),
             primitives: args.primitives.primitives,
-            notify: |m| eprintln!("{m}"),
+            notify: |m| note!("{m}"),
         },
         upgrade,
     )?;
-    eprintln!(
+    note!(
         "{} frames ({} presented), {:.1} ms per frame on average",
-        report.frames, report.presented, report.mean_frame_ms
+        report.frames,
+        report.presented,
+        report.mean_frame_ms
     );
     Ok(())
 }
