@@ -339,3 +339,87 @@ fn exports_are_y_up_metres_with_the_tree() {
     ]);
     assert_eq!(o.status.code(), Some(2), "a .bpt states no unit to convert");
 }
+
+/// `--only` and `--hide` keep the named instances (by part name, occurrence path or index);
+/// a pattern naming nothing is an error that points at `stats --list-parts`.
+#[test]
+fn only_and_hide_choose_parts() {
+    let as1 = model("as1-oc-214.stp");
+    let patches = |extra: &[&str]| -> u64 {
+        let out = out_path("parts.png");
+        let args = [
+            &["render", &as1, "-o", s(&out), "--size", "64x48", "--json"][..],
+            extra,
+        ]
+        .concat();
+        json_of(&patchwork(&args))["patches"]
+            .as_u64()
+            .expect("patches")
+    };
+    let all = patches(&[]);
+    assert_eq!(all, 160);
+    // rod-assembly_1 = 2 nuts + the rod.
+    let rod_assembly = patches(&["--only", "rod-assembly_1"]);
+    let nut = patches(&["--only", "#0"]);
+    let rod = patches(&["--only", "rod"]);
+    assert_eq!(rod_assembly, 2 * nut + rod, "{rod_assembly} {nut} {rod}");
+    assert_eq!(patches(&["--hide", "rod-assembly_1"]), all - rod_assembly);
+    assert_eq!(
+        patches(&["--only", "rod-assembly_1", "--hide", "nut"]),
+        rod,
+        "--hide applies after --only"
+    );
+    let o = patchwork(&[
+        "render",
+        &as1,
+        "-o",
+        s(&out_path("none.png")),
+        "--only",
+        "zzz*",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        text(&o.stderr).contains("--list-parts"),
+        "{}",
+        text(&o.stderr)
+    );
+    let o = patchwork(&["stats", &as1, "--list-parts"]);
+    assert!(text(&o.stdout).contains("rod-assembly_1/nut_1"));
+}
+
+/// `check --json` and `bench --flythrough --json`: one object each, with the verdict.
+#[test]
+fn check_and_bench_json_parse() {
+    let teapot = model("teapot.bpt");
+    let v = json_of(&patchwork(&[
+        "check", &teapot, "--views", "1", "--size", "96x72", "--json",
+    ]));
+    assert_eq!(v["views"], 1);
+    assert_eq!(v["crack_free"], true);
+    let names: Vec<&str> = v["variants"]
+        .as_array()
+        .expect("variants")
+        .iter()
+        .map(|x| x["fat_borders"].as_str().expect("name"))
+        .collect();
+    assert_eq!(names, vec!["off", "6", "4", "2"]);
+    let (csv, plot) = (out_path("fly.csv"), out_path("fly.png"));
+    let v = json_of(&patchwork(&[
+        "bench",
+        &teapot,
+        "--flythrough",
+        "--frames",
+        "6",
+        "--size",
+        "96x72",
+        "--csv",
+        s(&csv),
+        "--plot",
+        s(&plot),
+        "--json",
+    ]));
+    assert_eq!(v["frames"], 6);
+    assert_eq!(v["patches"], 32);
+    assert!(v["frame_ms"]["p50"].as_f64().expect("p50") > 0.0);
+    assert!(csv.is_file() && plot.is_file());
+}

@@ -7,6 +7,7 @@ pub mod bezier;
 pub mod memory;
 pub mod mesh;
 pub mod poles;
+pub mod select;
 pub mod trimmed;
 
 use std::sync::Arc;

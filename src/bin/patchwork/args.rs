@@ -373,3 +373,55 @@ mod tests {
         }
     }
 }
+
+/// Parts of an assembly to draw or write (`stats --list-parts` lists them).
+#[derive(Args, Debug, Clone, Default)]
+pub struct PartArgs {
+    /// Only these parts: a part name, an occurrence path or a leading part of it
+    /// (`rod-assembly_1` keeps everything below it), or `#N` (index in `stats --list-parts`);
+    /// `*` and `?` match as in file names. Repeat the flag or separate with commas.
+    #[arg(long, value_delimiter = ',', value_name = "PART")]
+    pub only: Vec<String>,
+    /// Leave out these parts (same patterns as --only; applied after it).
+    #[arg(long, value_delimiter = ',', value_name = "PART")]
+    pub hide: Vec<String>,
+}
+
+impl PartArgs {
+    /// `scene` with only the chosen parts; every pattern must name some instance, and
+    /// something must be left.
+    pub fn apply(&self, scene: Scene, file: &std::path::Path) -> Result<Scene, CliError> {
+        if self.only.is_empty() && self.hide.is_empty() {
+            return Ok(scene);
+        }
+        let named = |pattern: &str| -> Result<Vec<bool>, CliError> {
+            let hits: Vec<bool> = (scene.instances.iter().enumerate())
+                .map(|(i, inst)| patchwork::model::select::names(&scene, i, inst, pattern))
+                .collect();
+            if !hits.contains(&true) {
+                return Err(CliError::NoSuchPart {
+                    path: file.to_owned(),
+                    pattern: pattern.to_owned(),
+                });
+            }
+            Ok(hits)
+        };
+        let n = scene.instances.len();
+        let mut keep = vec![self.only.is_empty(); n];
+        for pattern in &self.only {
+            for (k, hit) in keep.iter_mut().zip(named(pattern)?) {
+                *k |= hit;
+            }
+        }
+        for pattern in &self.hide {
+            for (k, hit) in keep.iter_mut().zip(named(pattern)?) {
+                *k &= !hit;
+            }
+        }
+        scene
+            .with_instances(&keep)
+            .ok_or_else(|| CliError::NothingSelected {
+                path: file.to_owned(),
+            })
+    }
+}

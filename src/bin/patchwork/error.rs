@@ -59,6 +59,15 @@ pub enum CliError {
         value: usize,
         min: usize,
     },
+    /// `--only` / `--hide` with a pattern that names no instance.
+    #[error(
+        "{}: no part matches {pattern:?} (`patchwork stats --list-parts FILE` lists them)",
+        .path.display()
+    )]
+    NoSuchPart { path: PathBuf, pattern: String },
+    /// `--only` / `--hide` left nothing to draw.
+    #[error("{}: --only / --hide leave no part with faces", .path.display())]
+    NothingSelected { path: PathBuf },
     /// `export -o` with an extension that names no format we write.
     #[error("{}: unknown export format (write .glb, .gltf or .stl)", .path.display())]
     ExportFormat { path: PathBuf },

@@ -1,8 +1,10 @@
 //! `patchwork` command line: render, stats, check, export, bench, view, implode.
 //!
 //! Thin: each command lives in `cmd/<name>.rs` (its flags, checks, library calls, printing);
-//! shared flag groups and their checks in `args.rs`; errors in `error.rs`. Exit codes: 0 done
-//! (or passed), 1 a check or benchmark ran and failed, 2 an error (`error: …` on stderr).
+//! shared flag groups and their checks in `args.rs`; errors in `error.rs`; where output goes
+//! (`--json`, `-q`) in `out.rs`. Exit codes: 0 done (or passed), 1 a check or benchmark ran
+//! and failed (or `render --ref` found the image different), 2 an error (`error: …` on
+//! stderr).
 
 mod args;
 mod cmd;

@@ -522,8 +522,8 @@ fn path_without_a_file_name_is_an_io_error() {
 #[test]
 fn groups_become_the_node_hierarchy() {
     let mut scene = assembly();
-    let turn = Mat4::from_scale(Vec3::splat(0.001))
-        * Mat4::from_rotation_x(-std::f32::consts::FRAC_PI_2);
+    let turn =
+        Mat4::from_scale(Vec3::splat(0.001)) * Mat4::from_rotation_x(-std::f32::consts::FRAC_PI_2);
     scene.groups = vec![
         ExportGroup {
             name: "root".into(),

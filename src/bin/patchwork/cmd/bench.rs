@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
 use clap::Args;
+use serde_json::json;
 
 use patchwork::drive::flythrough::{FlythroughOptions, run as run_flythrough};
 use patchwork::drive::scale::{
@@ -28,7 +29,7 @@ use crate::args::{
     BudgetArgs, PrimitivesArg, at_least, fov_y, lod_options, parse_size, pixel_error, positive_ms,
 };
 use crate::error::CliError;
-use crate::out::{data, note};
+use crate::out::{self, data, note};
 
 #[derive(Args, Debug)]
 pub struct BenchArgs {
@@ -152,6 +153,49 @@ pub fn run(args: &BenchArgs) -> Result<bool, CliError> {
         &args.plot,
         &plot(&records, args.budget.budget_ms, summary.jump_frame),
     )?;
+    let crack_free = summary.max_crack_pixels.is_none_or(|m| m == 0);
+    let target = args
+        .target_ms
+        .and_then(|t| TargetSummary::of(&records).map(|s| (t, s)));
+    out::emit(&json!({
+        "file": file.display().to_string(),
+        "patches": scene.patches.len(),
+        "frames": records.len(),
+        "size": [args.size.0, args.size.1],
+        "budget_ms": args.budget.budget_ms,
+        "pixel_error": pixel_error,
+        "initial_tessellation_ms": summary.initial_ms,
+        "initial_upload_ms": summary.initial_upload_ms,
+        "initial_upload_bytes": summary.initial_upload_bytes,
+        "frame_ms": { "p50": summary.p50_frame_ms, "p99": summary.p99_frame_ms },
+        "cpu_ms": { "p50": summary.p50_cpu_ms, "p99": summary.p99_cpu_ms },
+        "uploaded_bytes": {
+            "mean": summary.mean_uploaded_bytes,
+            "max": summary.max_uploaded_bytes,
+        },
+        "tessellation_ms_p99": summary.p99_tessellation_ms,
+        "jump_frame": summary.jump_frame,
+        "converge_ms": summary.converge_ms,
+        "converge_frames": summary.converge_frames,
+        "target": target.map(|(t, s)| json!({
+            "target_ms": t,
+            "mean_ms": s.mean_ms,
+            "tail_mean_ms": s.tail_mean_ms,
+            "tail_pixel_error": s.tail_pixel_error,
+        })),
+        "instancing": {
+            "shared_patches": summary.instancing.shared_patches,
+            "made": summary.instancing.made,
+            "saved": summary.instancing.saved,
+        },
+        "crack_pixels": {
+            "total": summary.total_crack_pixels,
+            "max": summary.max_crack_pixels,
+        },
+        "crack_free": crack_free,
+        "csv": csv.display().to_string(),
+        "plot": args.plot.display().to_string(),
+    }));
     data!(
         "fly-through of {} ({} patches), {} frames at {}x{}, budget {} ms, pixel error {}{}",
         file.display(),
@@ -201,7 +245,7 @@ pub fn run(args: &BenchArgs) -> Result<bool, CliError> {
             summary.jump_frame
         ),
     }
-    if let (Some(t), Some(s)) = (args.target_ms, TargetSummary::of(&records)) {
+    if let Some((t, s)) = target {
         data!(
             "frame-rate target         {t} ms: achieved mean {:.2} ms (second half {:.2} ms at pixel error {:.2} on average)",
             s.mean_ms,
@@ -219,7 +263,6 @@ pub fn run(args: &BenchArgs) -> Result<bool, CliError> {
             inst.saved
         );
     }
-    let crack_free = summary.max_crack_pixels.is_none_or(|m| m == 0);
     if let (Some(max), Some(total)) = (summary.max_crack_pixels, summary.total_crack_pixels) {
         data!("crack pixels              {total} in all, at most {max} in a frame");
     }

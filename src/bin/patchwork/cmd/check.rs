@@ -4,6 +4,7 @@
 use std::path::PathBuf;
 
 use clap::Args;
+use serde_json::json;
 
 use patchwork::check::{CheckOptions, run_check};
 use patchwork::render::{FatBorders, Renderer};
@@ -12,7 +13,7 @@ use patchwork::view;
 use super::{load_built, progress};
 use crate::args::{PrimitivesArg, at_least, fov_y, parse_size, pixel_error};
 use crate::error::CliError;
-use crate::out::{data, note};
+use crate::out::{self, data, note};
 
 #[derive(Args, Debug)]
 pub struct CheckArgs {
@@ -148,6 +149,36 @@ pub fn run(args: &CheckArgs) -> Result<bool, CliError> {
         }
     }
     let ok = report.crack_free();
+    let totals = |t: &patchwork::check::crack::CrackCounts| {
+        json!({
+            "cracks": t.cracks(),
+            "background": t.background,
+            "behind": t.behind,
+            "growth": t.growth,
+            "growth_max_px": t.growth_max_px,
+            "inside": t.inside,
+        })
+    };
+    out::emit(&json!({
+        "file": args.file.display().to_string(),
+        "views": views,
+        "pixel_error": pixel_error,
+        "size": [args.size.0, args.size.1],
+        "variants": variants.iter().map(|v| {
+            let mut o = totals(&report.total(*v));
+            o["fat_borders"] = json!(v.name());
+            o
+        }).collect::<Vec<_>>(),
+        "narrowed": args.narrowed_width.map(|f| json!({
+            "factor": f,
+            "variants": variants.iter().filter(|v| **v != FatBorders::Off).map(|v| {
+                let mut o = totals(&report.total_narrowed(*v));
+                o["fat_borders"] = json!(v.name());
+                o
+            }).collect::<Vec<_>>(),
+        })),
+        "crack_free": ok,
+    }));
     data!(
         "{}",
         if ok {

@@ -23,6 +23,8 @@ pub struct ExportArgs {
     file: PathBuf,
     #[command(flatten)]
     cache: crate::args::CacheArgs,
+    #[command(flatten)]
+    parts: crate::args::PartArgs,
     /// Output file, its format by extension: .glb (binary glTF), .gltf (text glTF with a .bin
     /// beside it) or .stl (binary STL).
     #[arg(short, long)]
@@ -129,7 +131,9 @@ fn frame(
 pub fn run(args: &ExportArgs) -> Result<(), CliError> {
     let format = Format::of(&args.output)?;
     let tolerance = args.tolerance()?;
-    let scene = load_built(&args.file, &args.cache)?;
+    let scene = args
+        .parts
+        .apply(load_built(&args.file, &args.cache)?, &args.file)?;
     let (up, scale, unit) = frame(args, format, &scene)?;
     let opts = ExportOptions {
         tolerance,

@@ -26,6 +26,8 @@ pub struct ImplodeArgs {
     file: PathBuf,
     #[command(flatten)]
     cache: crate::args::CacheArgs,
+    #[command(flatten)]
+    parts: crate::args::PartArgs,
     /// Output folder (created if missing): frame-0000.png, …, implode.gif (explode.gif), and
     /// frames.csv with every frame's figures.
     #[arg(short, long)]
@@ -96,7 +98,9 @@ pub fn run(args: &ImplodeArgs) -> Result<bool, CliError> {
     let fps = args.fps;
     let budget = args.budget.validate()?;
     output_folder(&args.output)?;
-    let scene = load_built(&args.file, &args.cache)?;
+    let scene = args
+        .parts
+        .apply(load_built(&args.file, &args.cache)?, &args.file)?;
     // Frame the whole flight: the view holds every frame.
     let explosion = Explosion::new(&scene, args.by, distance);
     let mut framing = scene.clone();

@@ -23,6 +23,8 @@ pub struct RenderArgs {
     file: PathBuf,
     #[command(flatten)]
     cache: crate::args::CacheArgs,
+    #[command(flatten)]
+    parts: crate::args::PartArgs,
     /// Output PNG.
     #[arg(short, long)]
     output: PathBuf,
@@ -69,7 +71,7 @@ pub fn run(args: &RenderArgs) -> Result<bool, CliError> {
             args.file.display()
         );
     }
-    let scene = loaded.scene;
+    let scene = args.parts.apply(loaded.scene, &args.file)?;
     let camera = args.camera.validate()?;
     let view = camera.view(&scene)?;
     let t0 = Instant::now();

@@ -26,8 +26,9 @@ pub struct StatsArgs {
     cache: crate::args::CacheArgs,
     #[command(flatten)]
     camera: CameraArgs,
-    /// Print the placed solids / shells (instances): part, occurrence, shell, world bounding box.
-    #[arg(long)]
+    /// Print the placed solids / shells (instances): part, occurrence, shell, world bounding box
+    /// (the names --only and --hide take).
+    #[arg(long, visible_alias = "list-parts")]
     parts: bool,
     /// How many of the worst trimmed faces to name (error measured against the trimmed face).
     #[arg(long, default_value_t = 5)]

@@ -18,6 +18,8 @@ pub struct ViewArgs {
     file: PathBuf,
     #[command(flatten)]
     cache: crate::args::CacheArgs,
+    #[command(flatten)]
+    parts: crate::args::PartArgs,
     /// The starting camera, window size (--size) and pixel error (`+`/`-` change it).
     #[command(flatten)]
     camera: CameraArgs,
@@ -78,7 +80,7 @@ pub fn run(args: &ViewArgs) -> Result<(), CliError> {
             .cache
             .options(patchwork::prep::Hierarchies::CachedOrOriginal),
     )?;
-    let scene = loaded.scene;
+    let scene = args.parts.apply(loaded.scene, &args.file)?;
     let upgrade = loaded.pending.map(|pending| {
         let (tx, rx) = std::sync::mpsc::channel();
         let (start, file) = (scene.clone(), args.file.clone());
