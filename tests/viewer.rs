@@ -309,6 +309,10 @@ fn without_a_display_the_viewer_says_what_to_do() {
     assert_eq!(result.status.code(), Some(2));
     let stderr = String::from_utf8_lossy(&result.stderr);
     assert!(stderr.contains("xvfb"), "{stderr}");
+    assert!(
+        !stderr.contains(".cargo") && !stderr.contains("registry") && !stderr.contains(".."),
+        "no path inside the dependencies, no double stop: {stderr}"
+    );
 }
 
 /// A mesh is shown at once at full resolution; its hierarchies, built on a background thread,
@@ -366,5 +370,44 @@ fn a_mesh_is_shown_at_once_and_its_hierarchies_swapped_in() {
     assert!(
         !second.contains("hierarchies built") && !second.contains("hierarchies ready"),
         "the cache was not used: {second}"
+    );
+}
+
+/// A scripted `q` draws its frame, writes the screenshot and closes (exit 0): `--keys z,q`
+/// with 6 frames draws 2; `view --help` lists the keys.
+#[test]
+fn scripted_quit_still_writes_the_screenshot() {
+    let display = Display::open();
+    let out = common::scratch("viewer").join("quit.png");
+    let _ = std::fs::remove_file(&out);
+    let result = Command::new(env!("CARGO_BIN_EXE_patchwork"))
+        .arg("view")
+        .arg(common::root().join("models/teapot.bpt"))
+        .args([
+            "--size",
+            "200x150",
+            "--frames",
+            "6",
+            "--keys",
+            "z,q",
+            "--screenshot",
+        ])
+        .arg(&out)
+        .env("DISPLAY", &display.name)
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .expect("patchwork runs");
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(result.status.success(), "{stderr}");
+    assert!(stderr.contains("2 frames (2 presented)"), "{stderr}");
+    assert!(out.is_file(), "the screenshot is written: {stderr}");
+    let help = Command::new(env!("CARGO_BIN_EXE_patchwork"))
+        .args(["view", "--help"])
+        .output()
+        .expect("help");
+    let help = String::from_utf8_lossy(&help.stdout);
+    assert!(
+        help.contains("wireframe") && help.contains("PageUp"),
+        "{help}"
     );
 }

@@ -49,8 +49,9 @@ use present::Present;
 #[derive(Debug, Error)]
 pub enum ViewerError {
     #[error(
-        "cannot open a window: {0}. The viewer needs a display (X11): set DISPLAY, or run it \
-         under a virtual one, e.g. `xvfb-run -a patchwork view FILE` (apt-get install xvfb)"
+        "cannot open a window: {}. The viewer needs a display (X11): set DISPLAY, or run it \
+         under a virtual one, e.g. `xvfb-run -a patchwork view FILE` (apt-get install xvfb)",
+        os_reason(.0)
     )]
     NoDisplay(String),
     #[error("cannot draw into the window: {0}")]
@@ -62,6 +63,27 @@ pub enum ViewerError {
     #[error(transparent)]
     Check(#[from] crate::check::crack::CheckError),
 }
+
+/// A windowing error without winit's `os error at FILE:LINE: ` prefix (a path inside the
+/// cargo registry means nothing to a user) or trailing full stops.
+fn os_reason(e: &str) -> &str {
+    let reason = e
+        .strip_prefix("os error at ")
+        .and_then(|rest| rest.split_once(": ").map(|(_, why)| why))
+        .unwrap_or(e);
+    reason.trim_end_matches('.')
+}
+
+/// The mouse and keys of the window (printed by `patchwork view --help` and, with `?`, by the
+/// window on stderr).
+pub const CONTROLS: &str = "\
+Mouse: left drag orbits, right drag (or shift + left drag) pans, the wheel zooms.
+Keys:  arrows orbit, PageUp / PageDown zoom, f fit to view,
+       b fat borders off / 6 / 4 / 2, w wireframe, i patch-ID colours,
+       h screen-error heat map (blue finer than asked, green on target, red coarser),
+       + / - pixel error x2 / /2, p screenshot, space play / pause (--implode),
+       ? these lines, q or Esc quit.
+Title: frames per second, triangles, re-tessellation queue, largest screen error.";
 
 /// Settings of a viewer session.
 #[derive(Clone, Debug)]
@@ -220,6 +242,7 @@ pub fn run_upgrading(
         frame_time: Duration::ZERO,
         last_title: Instant::now(),
         shots: 0,
+        quitting: false,
     };
     event_loop
         .run_app(&mut app)
@@ -264,6 +287,8 @@ struct App {
     frame_time: Duration,
     last_title: Instant,
     shots: usize,
+    /// A scripted `q` / Escape: draw this frame, write the screenshot, then close.
+    quitting: bool,
 }
 
 struct State {
@@ -454,7 +479,14 @@ impl App {
             Key::Named(NamedKey::ArrowDown) => self.orbit.rotate(0.0, -step),
             Key::Named(NamedKey::PageUp) => self.orbit.zoom(0.8),
             Key::Named(NamedKey::PageDown) => self.orbit.zoom(1.25),
-            Key::Named(NamedKey::Escape) | Key::Character("q") => event_loop.exit(),
+            Key::Named(NamedKey::Escape) | Key::Character("q") => {
+                if self.options.frames.is_some() {
+                    self.quitting = true;
+                } else {
+                    event_loop.exit();
+                }
+            }
+            Key::Character("?") => (self.options.notify)(CONTROLS),
             Key::Character("f") => {
                 let size = self
                     .state
@@ -626,9 +658,7 @@ impl ApplicationHandler for App {
                     Ok(busy) => self.dirty |= busy,
                     Err(e) => return self.fail(event_loop, e),
                 }
-                if let Some(n) = self.options.frames
-                    && self.frames >= n
-                {
+                if self.quitting || self.options.frames.is_some_and(|n| self.frames >= n) {
                     if let Err(e) = self.screenshot() {
                         return self.fail(event_loop, e);
                     }

@@ -13,6 +13,7 @@ use crate::error::CliError;
 use crate::out::note;
 
 #[derive(Args, Debug)]
+#[command(after_help = patchwork::viewer::CONTROLS)]
 pub struct ViewArgs {
     /// Model file (.bpt, .step, .stp, .glb, .gltf, .obj, .ply, .stl).
     file: PathBuf,
