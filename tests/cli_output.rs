@@ -423,3 +423,49 @@ fn check_and_bench_json_parse() {
     assert!(v["frame_ms"]["p50"].as_f64().expect("p50") > 0.0);
     assert!(csv.is_file() && plot.is_file());
 }
+
+/// `implode` frames the assembled model (its last frame is the model at the size `render`
+/// draws it); `--frame-flight` frames the whole flight, so the assembled model is smaller.
+#[test]
+fn implode_frames_the_assembled_model() {
+    let as1 = model("as1-oc-214.stp");
+    let covered = |extra: &[&str], tag: &str| -> usize {
+        let dir = common::scratch("cli-output").join(tag);
+        let _ = std::fs::remove_dir_all(&dir);
+        let args = [
+            &[
+                "implode",
+                &as1,
+                "-o",
+                s(&dir),
+                "--frames",
+                "3",
+                "--size",
+                "96x72",
+                "--no-gif",
+                "--no-mp4",
+            ][..],
+            extra,
+        ]
+        .concat();
+        let o = patchwork(&args);
+        assert!(o.status.success(), "{}", text(&o.stderr));
+        let last = image::open(dir.join("frame-0002.png"))
+            .expect("last frame")
+            .to_rgba8();
+        last.pixels()
+            .filter(|p| p.0[..3] != [255, 255, 255])
+            .count()
+    };
+    let assembled = covered(&[], "implode-assembled");
+    let flight = covered(&["--frame-flight"], "implode-flight");
+    let render = render_rgba(&[], "implode-render.png")
+        .pixels()
+        .filter(|p| p.0[..3] != [255, 255, 255])
+        .count();
+    assert!(assembled > 2 * flight, "{assembled} vs {flight}");
+    assert!(
+        assembled.abs_diff(render) * 50 < render,
+        "the last frame is the rendered model: {assembled} vs {render}"
+    );
+}

@@ -7,6 +7,8 @@ use std::process::{Command, Stdio};
 
 use clap::Args;
 
+use patchwork::view::View;
+
 use patchwork::anim::{Explosion, GroupBy};
 use patchwork::drive::implode::{
     AnimOptions, frames_pass, growth_within_bound, run as run_animation,
@@ -61,6 +63,10 @@ pub struct ImplodeArgs {
     /// With --check: write check images and crack masks of frames with cracks or growth here.
     #[arg(long, requires = "check")]
     save_failures: Option<PathBuf>,
+    /// Frame the whole flight (every exploded position in view) instead of the assembled
+    /// model (whose parts then fly in from beyond the image's edges).
+    #[arg(long)]
+    frame_flight: bool,
     #[command(flatten)]
     camera: CameraArgs,
     #[command(flatten)]
@@ -101,12 +107,20 @@ pub fn run(args: &ImplodeArgs) -> Result<bool, CliError> {
     let scene = args
         .parts
         .apply(load_built(&args.file, &args.cache)?, &args.file)?;
-    // Frame the whole flight: the view holds every frame.
+    // Frame the assembled model (or the whole flight); near and far always hold the flight.
     let explosion = Explosion::new(&scene, args.by, distance);
-    let mut framing = scene.clone();
-    framing.bounds = explosion.bounds(&scene);
+    let mut flight = scene.clone();
+    flight.bounds = explosion.bounds(&scene);
     let camera = args.camera.validate()?;
-    let view = camera.view(&framing)?;
+    let framed = camera.view(if args.frame_flight { &flight } else { &scene })?;
+    let view = View::new(
+        framed.eye,
+        framed.target,
+        framed.up,
+        framed.fov_y,
+        (framed.width, framed.height),
+        &flight.bounds,
+    );
     create_dir(&args.output)?;
     let mut renderer = Renderer::new()?;
     renderer.primitives = args.draw.primitives.primitives;
