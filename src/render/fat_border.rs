@@ -1,4 +1,5 @@
-//! Fat borders: the CPU twin of the WGSL expansion and the per-variant triangle templates.
+//! Fat borders: the CPU twin of the WGSL expansion, the per-variant triangle templates and the
+//! border points the vertex shader pulls them from ([`BorderGeometry`]).
 //!
 //! Balázs, Guthe, Klein, "Fat Borders" (2004), §3.1–3.2. Every border vertex v_i of a patch is
 //! expanded into displaced vertices v_i + ε·normalize(dir × d_i), dir ∈ {s_i, t_i, s_{i−1},
@@ -14,13 +15,15 @@
 //! (and v_i4, v_i5, v_i6) all become the mitre point `ε·normalize(t_i × d_i) / cos(θ/2)`. The band
 //! is then at least ε wide perpendicular to both segments and covers the fan's round wedge (the
 //! mitre contains it), the displaced vertices move by under 0.4 % of ε, and the fans have zero
-//! area, so their triangles are left out of the index buffer: on the teapot about three joints
-//! in four are straight, which cuts the 6-vertex variant from 6 to 2 triangles there. The
+//! area and are never shaded (a zero-area triangle covers no pixel): on the teapot about three joints
+//! in four are straight, which cuts the 6-vertex variant from 6 to 2 drawn triangles there. The
 //! decision is made once, on the CPU ([`is_straight`]), and passed to the shader as a flag in
-//! the slot code, so both twins agree by construction.
+//! the border point, so both twins agree by construction.
 //!
 //! [`expand`] mirrors `fat_border_position` in `shaders/fat_border_lib.wgsl` operation by
-//! operation, in f32; a test runs the WGSL function in a compute twin and compares.
+//! operation, in f32, and [`resolve`] / [`position`] mirror the vertex pulling
+//! (`fb_resolve`, `fat_border_vertex`); `tests/fat_border_twin.rs` runs the WGSL functions in
+//! a compute twin and compares.
 
 use glam::Vec3;
 

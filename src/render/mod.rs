@@ -394,7 +394,7 @@ impl Renderer {
     /// storage binding, at most its largest buffer.
     pub(super) fn max_points_bytes(&self) -> u64 {
         let l = self.gpu.device.limits();
-        (l.max_storage_buffer_binding_size as u64).min(l.max_buffer_size)
+        l.max_storage_buffer_binding_size.min(l.max_buffer_size)
     }
 
     /// GPU wait and bytes written by the last [`Renderer::render`].

@@ -1,4 +1,4 @@
-//! Upload: patch meshes into vertex, index and fat-border buffers; mesh-patch cuts drawn as
+//! Upload: patch meshes into vertex, index and fat-border point buffers; mesh-patch cuts drawn as
 //! ranges of per-patch static buffers (Holst's static arcs) with their strips (the one place
 //! the strip policy is decided: [`super::Primitives`]).
 
