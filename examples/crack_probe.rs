@@ -127,19 +127,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 let g = patchwork::render::BorderGeometry::of(std::slice::from_ref(m));
                 let eye = view.eye.as_vec3();
                 let mut inside = 0;
-                for tri in g.indices[0].chunks_exact(3) {
+                for tri in g.triangles(patchwork::render::FatBorders::Six, eye) {
                     let q: Vec<(f64, f64)> = tri
                         .iter()
-                        .filter_map(|&i| {
-                            view.project(g.vertices[i as usize].expanded(eye).as_dvec3())
-                        })
+                        .filter_map(|p| view.project(p.as_dvec3()))
                         .map(|p| (p.0, p.1))
                         .collect();
                     let near = q.iter().any(|p| (p.0 - c.0).hypot(p.1 - c.1) < 0.7);
                     if near && q.len() == 3 {
-                        let codes: Vec<u32> =
-                            tri.iter().map(|&i| g.vertices[i as usize].code).collect();
-                        println!("      tri {q:.3?} codes {codes:?}");
+                        println!("      tri {q:.3?}");
                     }
                     if q.len() == 3 {
                         let side = |a: (f64, f64), b: (f64, f64)| {

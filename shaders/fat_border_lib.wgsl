@@ -80,3 +80,115 @@ fn fat_border_position(
     }
     return cur + eps * off - eps * d;
 }
+
+// ---- Vertex pulling: the displaced vertices expanded from border points ----
+//
+// Every border vertex is stored once, ring after ring, as a `render::fat_border::BorderPoint`
+// of FB_POINT_WORDS 32-bit words: cur (3 × f32), ε, normal (3 × f32), info, patch id, packed
+// colour. info: FB_INFO_STRAIGHT | FB_INFO_FIRST | FB_INFO_LAST | FB_INFO_CLOSING | (ring
+// length - 1) << FB_RING_SHIFT. Each ring is followed by a closing point, a copy of its
+// first point. Vertex i of a draw is slot (i mod 8) of point (i div 8); the triangles come
+// from an index pattern that depends only on the point's position (`render::fat_border::
+// pattern`), so a ring's last segment reaches its closing point, whose slots 3 and 6 are
+// those of the ring's first point and whose other slots coincide with them or with the next
+// point's slot 6: every triangle of a closing point has zero area. CPU twin:
+// `render::fat_border::resolve` and `position`.
+
+const FB_POINT_WORDS: u32 = 10u;
+const FB_INFO_STRAIGHT: u32 = 1u;
+const FB_INFO_FIRST: u32 = 2u;
+const FB_INFO_LAST: u32 = 4u;
+const FB_INFO_CLOSING: u32 = 8u;
+const FB_RING_SHIFT: u32 = 4u;
+
+@group(1) @binding(0) var<storage, read> fb_points: array<u32>;
+
+fn fb_word_f(k: u32, w: u32) -> f32 {
+    return bitcast<f32>(fb_points[k * FB_POINT_WORDS + w]);
+}
+
+fn fb_cur(k: u32) -> vec3<f32> {
+    return vec3<f32>(fb_word_f(k, 0u), fb_word_f(k, 1u), fb_word_f(k, 2u));
+}
+
+fn fb_normal(k: u32) -> vec3<f32> {
+    return vec3<f32>(fb_word_f(k, 4u), fb_word_f(k, 5u), fb_word_f(k, 6u));
+}
+
+fn fb_info(k: u32) -> u32 {
+    return fb_points[k * FB_POINT_WORDS + 7u];
+}
+
+fn fb_patch_id(k: u32) -> u32 {
+    return fb_points[k * FB_POINT_WORDS + 8u];
+}
+
+fn fb_color(k: u32) -> vec4<f32> {
+    return unpack4x8unorm(fb_points[k * FB_POINT_WORDS + 9u]);
+}
+
+// The ring neighbour of point k before it (after = false) or after it.
+fn fb_neighbour(k: u32, after: bool) -> u32 {
+    let info = fb_info(k);
+    let span = info >> FB_RING_SHIFT;
+    if (after) {
+        if ((info & FB_INFO_LAST) != 0u) {
+            return k - span;
+        }
+        return k + 1u;
+    }
+    if ((info & FB_INFO_FIRST) != 0u) {
+        return k + span;
+    }
+    return k - 1u;
+}
+
+// The point and slot whose displaced vertex vertex i is, for a template of `len` codes
+// (18, 12: slots as the paper's; 6: the 2-vertex variant, whose pattern names the next
+// point's v2, v5 as slots 3, 6).
+fn fb_resolve(i: u32, len: u32) -> vec2<u32> {
+    var p = i / 8u;
+    var s = i % 8u;
+    if ((fb_info(p) & FB_INFO_CLOSING) != 0u) {
+        if (len == 6u) {
+            if (s == 2u || s == 5u) {
+                p = p + 1u;
+                s = 6u;
+            }
+        } else if (s == 1u) {
+            p = p + 1u;
+            s = 6u;
+        } else if (s == 0u || s == 2u) {
+            s = 3u;
+        } else if (s == 4u || s == 5u) {
+            s = 6u;
+        }
+        let info = fb_info(p);
+        if ((info & FB_INFO_CLOSING) != 0u) {
+            p = p - (info >> FB_RING_SHIFT) - 1u;
+        }
+    }
+    if (len == 6u) {
+        if (s == 3u) {
+            s = 2u;
+        } else if (s == 6u) {
+            s = 5u;
+        }
+    }
+    return vec2<u32>(p, s);
+}
+
+// Vertex i (of a template with `len` codes) for an eye at `eye`; `w` holds the point it is
+// expanded from (its shading attributes).
+fn fat_border_vertex(i: u32, len: u32, eye: vec3<f32>) -> vec4<f32> {
+    let r = fb_resolve(i, len);
+    let p = r.x;
+    var flag = 0u;
+    if ((fb_info(p) & FB_INFO_STRAIGHT) != 0u) {
+        flag = FB_STRAIGHT;
+    }
+    let prev = fb_cur(fb_neighbour(p, false));
+    let next = fb_cur(fb_neighbour(p, true));
+    let pos = fat_border_position(prev, fb_cur(p), next, eye, fb_word_f(p, 3u), r.y | flag);
+    return vec4<f32>(pos, bitcast<f32>(p));
+}

@@ -25,3 +25,23 @@ fn cs_expand(@builtin(global_invocation_id) gid: vec3<u32>) {
     let p = fat_border_position(q.prev.xyz, q.cur.xyz, q.next.xyz, q.eye_eps.xyz, q.eye_eps.w, q.code.x);
     outputs[i] = vec4<f32>(p, 1.0);
 }
+
+// Compute twin of the vertex pulling: output i = vertex i over the border points (fb_points,
+// group 1) for a template of `pull.len_count.x` codes.
+struct Pull {
+    // xyz: eye.
+    eye: vec4<f32>,
+    // x: template codes, y: vertices.
+    len_count: vec4<u32>,
+};
+
+@group(0) @binding(2) var<uniform> pull: Pull;
+
+@compute @workgroup_size(64)
+fn cs_pull(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if (i >= pull.len_count.y) {
+        return;
+    }
+    outputs[i] = fat_border_vertex(i, pull.len_count.x, pull.eye.xyz);
+}

@@ -11,7 +11,8 @@ struct Globals {
     light: vec4<f32>,
     // rgb: colour for `flat` shading, and for `lit` shading of patches without their own.
     color: vec4<f32>,
-    // x: shading mode (0 lit, 1 flat, 2 ids).
+    // x: shading mode (0 lit, 1 flat, 2 ids); y: codes of the fat-border template drawn (18,
+    // 12 or 6; see `fat_border_vertex`).
     mode: vec4<u32>,
 };
 
@@ -45,28 +46,20 @@ fn vs_surface(
     return out;
 }
 
-// One displaced fat-border vertex: border vertex `cur` with its neighbours on the border
-// polyline and the slot code to expand (see `render::fat_border::BorderGeometry`).
+// One displaced fat-border vertex, pulled from the border points (`fat_border_vertex`):
+// vertex i of the template with globals.mode.y codes.
 @vertex
-fn vs_border(
-    @location(0) prev: vec3<f32>,
-    @location(1) cur: vec3<f32>,
-    @location(2) next: vec3<f32>,
-    @location(3) normal: vec3<f32>,
-    @location(4) eps: f32,
-    @location(5) patch_id: u32,
-    @location(6) code: u32,
-    @location(7) color: vec4<f32>,
-) -> VsOut {
-    let p = fat_border_position(prev, cur, next, globals.eye.xyz, eps, code);
+fn vs_border(@builtin(vertex_index) i: u32) -> VsOut {
+    let fb = fat_border_vertex(i, globals.mode.y, globals.eye.xyz);
+    let k = bitcast<u32>(fb.w);
     var out: VsOut;
-    out.clip = globals.view_proj * vec4<f32>(p, 1.0);
+    out.clip = globals.view_proj * vec4<f32>(fb.xyz, 1.0);
     // Shading attributes come from the original border vertex (paper, step 6).
-    out.world = cur;
-    out.actual = p;
-    out.normal = normal;
-    out.patch_id = patch_id;
-    out.color = color;
+    out.world = fb_cur(k);
+    out.actual = fb.xyz;
+    out.normal = fb_normal(k);
+    out.patch_id = fb_patch_id(k);
+    out.color = fb_color(k);
     return out;
 }
 

@@ -1,12 +1,17 @@
 //! The WGSL fat-border expansion (run in a compute twin on the adapter) and its Rust CPU twin
-//! give the same positions.
+//! give the same positions: one displaced vertex from its inputs, and every vertex of a
+//! variant's draw pulled from border points (ring neighbours, templates, collapsed fans).
 
 mod common;
 
 use glam::Vec3;
 use patchwork::check::crack::SplitMix64;
-use patchwork::render::fat_border::{STRAIGHT_FLAG, expand, is_straight};
+use patchwork::render::fat_border::{
+    INFO_CLOSING, INFO_STRAIGHT, SLOTS_PER_POINT, STRAIGHT_FLAG, expand, is_straight, position,
+};
 use patchwork::render::shaders::FAT_BORDER_TWIN;
+use patchwork::render::{BorderGeometry, FatBorders};
+use patchwork::tessellate::PatchMesh;
 use wgpu::util::DeviceExt;
 
 #[repr(C)]
@@ -66,28 +71,16 @@ fn inputs() -> Vec<(Vec3, Vec3, Vec3, Vec3, f32, u32)> {
     out
 }
 
-#[test]
-fn compute_twin_matches_cpu_twin() {
-    let renderer = common::renderer();
-    let gpu = renderer.gpu();
+/// Runs entry point `entry` of the compute twin over `count` outputs with `bindings` (group,
+/// binding, buffer) and reads the outputs back.
+fn run_twin(
+    gpu: &patchwork::render::Gpu,
+    entry: &str,
+    count: usize,
+    bindings: &[(u32, u32, &wgpu::Buffer)],
+) -> Vec<[f32; 4]> {
     let device = &gpu.device;
-    let cases = inputs();
-    let data: Vec<TwinInput> = cases
-        .iter()
-        .map(|&(p, c, n, e, eps, slot)| TwinInput {
-            prev: p.extend(1.0).into(),
-            cur: c.extend(1.0).into(),
-            next: n.extend(1.0).into(),
-            eye_eps: e.extend(eps).into(),
-            code: [slot, 0, 0, 0],
-        })
-        .collect();
-    let input = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("twin inputs"),
-        contents: bytemuck::cast_slice(&data),
-        usage: wgpu::BufferUsages::STORAGE,
-    });
-    let out_size = (cases.len() * 16) as u64;
+    let out_size = (count * 16) as u64;
     let output = device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("twin outputs"),
         size: out_size,
@@ -108,30 +101,40 @@ fn compute_twin_matches_cpu_twin() {
         label: Some("twin"),
         layout: None,
         module: &module,
-        entry_point: Some("cs_expand"),
+        entry_point: Some(entry),
         compilation_options: Default::default(),
         cache: None,
     });
-    let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: None,
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: input.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: output.as_entire_binding(),
-            },
-        ],
-    });
+    let mut all = vec![(0, 1, &output)];
+    all.extend_from_slice(bindings);
+    let groups: Vec<(u32, wgpu::BindGroup)> = [0u32, 1]
+        .iter()
+        .filter(|g| all.iter().any(|b| b.0 == **g))
+        .map(|&g| {
+            let entries: Vec<wgpu::BindGroupEntry<'_>> = all
+                .iter()
+                .filter(|b| b.0 == g)
+                .map(|b| wgpu::BindGroupEntry {
+                    binding: b.1,
+                    resource: b.2.as_entire_binding(),
+                })
+                .collect();
+            let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: None,
+                layout: &pipeline.get_bind_group_layout(g),
+                entries: &entries,
+            });
+            (g, bind)
+        })
+        .collect();
     let mut encoder = device.create_command_encoder(&Default::default());
     {
         let mut pass = encoder.begin_compute_pass(&Default::default());
         pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &bind, &[]);
-        pass.dispatch_workgroups((cases.len() as u32).div_ceil(64), 1, 1);
+        for (g, bind) in &groups {
+            pass.set_bind_group(*g, bind, &[]);
+        }
+        pass.dispatch_workgroups((count as u32).div_ceil(64), 1, 1);
     }
     encoder.copy_buffer_to_buffer(&output, 0, &readback, 0, out_size);
     gpu.queue.submit([encoder.finish()]);
@@ -140,7 +143,32 @@ fn compute_twin_matches_cpu_twin() {
         .poll(wgpu::PollType::wait_indefinitely())
         .expect("poll");
     let bytes = readback.get_mapped_range(..).expect("mapped").to_vec();
-    let gpu_out: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&bytes);
+    bytemuck::pod_collect_to_vec(&bytes)
+}
+
+#[test]
+fn compute_twin_matches_cpu_twin() {
+    let renderer = common::renderer();
+    let gpu = renderer.gpu();
+    let cases = inputs();
+    let data: Vec<TwinInput> = cases
+        .iter()
+        .map(|&(p, c, n, e, eps, slot)| TwinInput {
+            prev: p.extend(1.0).into(),
+            cur: c.extend(1.0).into(),
+            next: n.extend(1.0).into(),
+            eye_eps: e.extend(eps).into(),
+            code: [slot, 0, 0, 0],
+        })
+        .collect();
+    let input = gpu
+        .device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("twin inputs"),
+            contents: bytemuck::cast_slice(&data),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+    let gpu_out = run_twin(gpu, "cs_expand", cases.len(), &[(0, 0, &input)]);
 
     let mut worst: f32 = 0.0;
     for (k, &(p, c, n, e, eps, slot)) in cases.iter().enumerate() {
@@ -159,4 +187,110 @@ fn compute_twin_matches_cpu_twin() {
         "largest |cpu − gpu| / ε over {} cases: {worst:e}",
         cases.len()
     );
+}
+
+/// Meshes whose rings mix straight joints (gently bent runs), sharp corners, and rings of one
+/// and two points; random ε and colours.
+fn ring_meshes() -> Vec<PatchMesh> {
+    let mut rng = SplitMix64::new(7);
+    let mut r = |s: f64| ((rng.next_f64() * 2.0 - 1.0) * s) as f32;
+    (0..6u32)
+        .map(|id| {
+            let mut positions = Vec::new();
+            let mut borders = Vec::new();
+            for ring in 0..3 {
+                let n = [48usize, 1, 2, 7][(id as usize + ring) % 4];
+                let base = positions.len() as u32;
+                let centre = Vec3::new(r(2.0), r(2.0), r(2.0));
+                let bend = r(0.2);
+                for k in 0..n {
+                    let a = k as f32 / n as f32 * std::f32::consts::TAU;
+                    // Mostly straight runs (a polygon with few sides and wobbles) or circles.
+                    let rad = if ring == 0 {
+                        1.0 + bend * (3.0 * a).sin()
+                    } else {
+                        0.5
+                    };
+                    positions.push(centre + Vec3::new(rad * a.cos(), rad * a.sin(), r(0.05)));
+                }
+                borders.push((base..base + n as u32).collect());
+            }
+            let count = positions.len();
+            PatchMesh {
+                patch_id: id,
+                normals: (0..count)
+                    .map(|_| Vec3::new(r(1.0), r(1.0), 1.0).normalize())
+                    .collect(),
+                positions,
+                borders,
+                eps_target: 0.001 + (r(0.02)).abs() as f64,
+                color: (id % 2 == 0).then_some([0.2, 0.5, 0.9]),
+                ..PatchMesh::default()
+            }
+        })
+        .collect()
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Pull {
+    eye: [f32; 4],
+    len_count: [u32; 4],
+}
+
+#[test]
+fn pulled_vertices_match_the_cpu_twin() {
+    let renderer = common::renderer();
+    let gpu = renderer.gpu();
+    let meshes = ring_meshes();
+    let g = BorderGeometry::of(&meshes);
+    let straight = g
+        .points
+        .iter()
+        .filter(|p| p.info & INFO_STRAIGHT != 0 && p.info & INFO_CLOSING == 0)
+        .count();
+    assert!(
+        straight > 10 && straight < g.points.len() - 10,
+        "{straight}"
+    );
+    let points = gpu
+        .device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("twin points"),
+            contents: bytemuck::cast_slice(&g.points),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+    // Every vertex of every point (the closing points' too), but not past the last point.
+    let count = (g.points.len() - 1) * SLOTS_PER_POINT;
+    let mut checked = 0;
+    for eye in [Vec3::new(3.0, -2.0, 9.0), Vec3::new(-0.5, 0.2, 0.3)] {
+        for variant in FatBorders::ALL_ON {
+            let codes = g.index_count(variant) / g.points.len();
+            let pull = Pull {
+                eye: eye.extend(1.0).into(),
+                len_count: [codes as u32, count as u32, 0, 0],
+            };
+            let params = gpu
+                .device
+                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("twin pull"),
+                    contents: bytemuck::bytes_of(&pull),
+                    usage: wgpu::BufferUsages::UNIFORM,
+                });
+            let out = run_twin(gpu, "cs_pull", count, &[(0, 2, &params), (1, 0, &points)]);
+            for (i, o) in out.iter().enumerate() {
+                let (p, j) = position(&g.points, variant, i, eye);
+                assert_eq!(o[3].to_bits() as usize, j, "{variant} vertex {i}: point");
+                let gpu_p = Vec3::new(o[0], o[1], o[2]);
+                let eps = g.points[j].eps;
+                let err = (p - gpu_p).length();
+                assert!(
+                    err <= 1e-4 * eps + 4e-6 * (1.0 + p.length()),
+                    "{variant} vertex {i}: cpu {p:?} gpu {gpu_p:?} (ε {eps})"
+                );
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked > 1000, "{checked}");
 }

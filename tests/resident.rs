@@ -13,7 +13,7 @@ use patchwork::lod::{FrameLoop, LodOptions};
 use patchwork::model::Scene;
 use patchwork::render::resident::Fault;
 use patchwork::render::{
-    BorderGeometry, BorderVertex, FatBorders, Frame, Primitives, RenderOptions, Renderer,
+    BorderGeometry, BorderPoint, FatBorders, Frame, Primitives, RenderOptions, Renderer,
     ResidentGeometry, Shading, UploadStats,
 };
 use patchwork::strips::Join;
@@ -121,6 +121,15 @@ fn drive(
 fn compare(renderer: &mut Renderer, scene: &Scene, fault: Fault) -> (Vec<usize>, usize) {
     let mut resident = ResidentGeometry::new(renderer);
     resident.fault = fault;
+    compare_with(renderer, scene, resident)
+}
+
+/// [`compare`] with a resident geometry set up by the caller.
+fn compare_with(
+    renderer: &mut Renderer,
+    scene: &Scene,
+    mut resident: ResidentGeometry,
+) -> (Vec<usize>, usize) {
     let mut diffs = Vec::new();
     let mut partial = 0;
     drive(
@@ -175,6 +184,41 @@ fn resident_frames_equal_whole_uploads_bit_for_bit() {
 }
 
 #[test]
+fn many_arenas_draw_the_same_picture() {
+    // Pools capped at 128 KiB: the teapot's geometry spreads over many arenas (as a scene past
+    // the device's largest buffer does); the draws still follow patch order, bit for bit.
+    let mut renderer = common::renderer();
+    let scene = common::teapot();
+    for primitives in [Primitives::List, Primitives::Strips] {
+        renderer.primitives = primitives;
+        let mut resident = ResidentGeometry::new(&renderer);
+        resident.arena_bytes = Some(128 << 10);
+        let (diffs, partial) = compare_with(&mut renderer, &scene, resident);
+        assert!(partial >= 2, "{primitives:?}: {partial}");
+        assert!(
+            diffs.iter().all(|&d| d == 0),
+            "{primitives:?}: differing pixels per frame {diffs:?}"
+        );
+    }
+    let mut resident = ResidentGeometry::new(&renderer);
+    resident.arena_bytes = Some(128 << 10);
+    let lod = FrameLoop::new(&scene, &view(&scene, 0), LodOptions::default());
+    resident
+        .update(&renderer, lod.shared_meshes(), 1)
+        .expect("fits in many arenas");
+    let memory = resident.memory();
+    assert!(memory.arenas >= 2, "{memory:?}");
+    // One patch larger than an arena cannot be placed anywhere.
+    let mut tiny = ResidentGeometry::new(&renderer);
+    tiny.arena_bytes = Some(256);
+    let err = tiny.update(&renderer, lod.shared_meshes(), 1);
+    assert!(
+        matches!(err, Err(patchwork::render::RenderError::TooLarge { .. })),
+        "{err:?}"
+    );
+}
+
+#[test]
 fn a_stale_slot_shows_in_the_picture() {
     // The mutation the test above must catch: a changed patch left as it was.
     let mut renderer = common::renderer();
@@ -189,14 +233,16 @@ fn a_stale_slot_shows_in_the_picture() {
 
 /// Bytes of one patch's geometry drawn as triangle lists: surface vertices (position and
 /// normal as 3 × f32 each, patch id u32, colour 4 × u8: 32 bytes), 3 indices of 4 bytes per
-/// triangle, and its fat borders (vertices and the indices of all three variants).
+/// triangle, and its fat borders (one 40-byte point per border vertex and one per ring,
+/// expanded on the GPU).
 fn list_patch_bytes(m: &PatchMesh) -> u64 {
     let borders = BorderGeometry::of(std::iter::once(m));
-    let border_indices: usize = borders.indices.iter().map(Vec::len).sum();
-    (32 * m.positions.len()
-        + 12 * m.triangles.len()
-        + size_of::<BorderVertex>() * borders.vertices.len()
-        + 4 * border_indices) as u64
+    assert_eq!(size_of::<BorderPoint>(), 40);
+    assert_eq!(
+        borders.points.len(),
+        m.border_vertex_count() + m.borders.len()
+    );
+    (32 * m.positions.len() + 12 * m.triangles.len() + 40 * borders.points.len()) as u64
 }
 
 #[test]
@@ -228,9 +274,11 @@ fn a_frame_uploads_exactly_the_changed_patches_bytes() {
             if stats.compactions == 0 {
                 assert_eq!(stats.reindexed_bytes, 0, "frame {i}");
             }
-            // Draw arguments: one per merged draw, written when the draw list was rebuilt.
+            // Draw arguments: one per merged draw (three for fat borders, one per variant),
+            // written when the draw list was rebuilt.
+            let border = resident.border_draw_count() as u64;
             let args = if indirect && stats.rebuilt {
-                20 * resident.draw_count() as u64
+                20 * (resident.draw_count() as u64 - border) + 3 * 20 * border
             } else {
                 0
             };
@@ -308,7 +356,8 @@ fn a_new_generation_without_new_meshes_only_rebuilds_the_draws() {
     assert_eq!(again.geometry_bytes, 0);
     assert!(again.rebuilt);
     let args = if renderer.gpu().indirect {
-        20 * resident.draw_count() as u64
+        let border = resident.border_draw_count() as u64;
+        20 * (resident.draw_count() as u64 - border) + 3 * 20 * border
     } else {
         0
     };
@@ -318,32 +367,41 @@ fn a_new_generation_without_new_meshes_only_rebuilds_the_draws() {
 #[test]
 fn packing_every_pool_keeps_the_picture() {
     // Compaction moves vertices: the moved patches' indices are written again. The frame
-    // after packing equals a whole upload's.
-    let mut renderer = common::renderer();
-    let scene = common::load("bunny.glb");
-    let mut resident = ResidentGeometry::new(&renderer);
-    let mut last = None;
-    drive(
-        &mut renderer,
-        &scene,
-        &mut resident,
-        |i, _, lod, _, _, _| {
-            if i + 1 == FRAMES {
-                last = Some(lod.meshes().cloned().collect::<Vec<_>>());
-            }
-        },
-    );
-    let meshes = last.expect("frames ran");
-    let packed = resident.compact_all(&renderer);
-    assert!(packed.compactions > 0, "{packed:?}");
-    assert!(packed.reindexed_bytes > 0, "nothing moved: {packed:?}");
-    assert_eq!(packed.geometry_bytes, 0);
-    let v = view(&scene, FRAMES - 1);
-    for i in 0..4 {
-        let opts = options(i);
-        let a = renderer.render(&resident, &v, &opts).expect("renders");
-        let whole = renderer.upload(&meshes);
-        let b = renderer.render(&whole, &v, &opts).expect("renders");
-        assert_eq!(differing(&a, &b), 0, "options {opts:?}");
+    // after packing equals a whole upload's. The teapot's surfaces are resident; the bunny's
+    // mesh patches draw from static buffers and only their fat-border points (which no index
+    // refers to) are resident.
+    for (name, moves_vertices) in [("teapot.bpt", true), ("bunny.glb", false)] {
+        let mut renderer = common::renderer();
+        let scene = common::load(name);
+        let mut resident = ResidentGeometry::new(&renderer);
+        let mut last = None;
+        drive(
+            &mut renderer,
+            &scene,
+            &mut resident,
+            |i, _, lod, _, _, _| {
+                if i + 1 == FRAMES {
+                    last = Some(lod.meshes().cloned().collect::<Vec<_>>());
+                }
+            },
+        );
+        let meshes = last.expect("frames ran");
+        let packed = resident.compact_all(&renderer);
+        assert!(packed.compactions > 0, "{name}: {packed:?}");
+        assert!(packed.copied_bytes > 0, "{name}: {packed:?}");
+        assert_eq!(
+            packed.reindexed_bytes > 0,
+            moves_vertices,
+            "{name}: {packed:?}"
+        );
+        assert_eq!(packed.geometry_bytes, 0);
+        let v = view(&scene, FRAMES - 1);
+        for i in 0..4 {
+            let opts = options(i);
+            let a = renderer.render(&resident, &v, &opts).expect("renders");
+            let whole = renderer.upload(&meshes);
+            let b = renderer.render(&whole, &v, &opts).expect("renders");
+            assert_eq!(differing(&a, &b), 0, "{name}: options {opts:?}");
+        }
     }
 }

@@ -130,7 +130,7 @@ impl Renderer {
                     Shading::Flat => 1,
                     Shading::Ids => 2,
                 },
-                0,
+                fat_border::template(opts.fat_borders).len() as u32,
                 0,
                 0,
             ],
@@ -198,10 +198,16 @@ impl Renderer {
             });
             pass.set_bind_group(0, bind, &[]);
             match meshes {
-                Geometry::Uploaded(m) => m.encode(&mut pass, pipes, opts.fat_borders),
-                Geometry::Resident(r) => {
-                    r.encode(&mut pass, pipes, opts.fat_borders, self.gpu.indirect)
+                Geometry::Uploaded(m) => {
+                    m.encode(&mut pass, pipes, &self.patterns, opts.fat_borders)
                 }
+                Geometry::Resident(r) => r.encode(
+                    &mut pass,
+                    pipes,
+                    &self.patterns,
+                    opts.fat_borders,
+                    self.gpu.indirect,
+                ),
             }
         }
         read_texture(&self.gpu, encoder, targets, &mut self.last.gpu_wait)

@@ -1,4 +1,5 @@
-//! Fat borders: the CPU twin of the WGSL expansion and the per-variant triangle templates.
+//! Fat borders: the CPU twin of the WGSL expansion, the per-variant triangle templates and the
+//! border points the vertex shader pulls them from ([`BorderGeometry`]).
 //!
 //! Balázs, Guthe, Klein, "Fat Borders" (2004), §3.1–3.2. Every border vertex v_i of a patch is
 //! expanded into displaced vertices v_i + ε·normalize(dir × d_i), dir ∈ {s_i, t_i, s_{i−1},
@@ -14,13 +15,15 @@
 //! (and v_i4, v_i5, v_i6) all become the mitre point `ε·normalize(t_i × d_i) / cos(θ/2)`. The band
 //! is then at least ε wide perpendicular to both segments and covers the fan's round wedge (the
 //! mitre contains it), the displaced vertices move by under 0.4 % of ε, and the fans have zero
-//! area, so their triangles are left out of the index buffer: on the teapot about three joints
-//! in four are straight, which cuts the 6-vertex variant from 6 to 2 triangles there. The
+//! area and are never shaded (a zero-area triangle covers no pixel): on the teapot about three joints
+//! in four are straight, which cuts the 6-vertex variant from 6 to 2 drawn triangles there. The
 //! decision is made once, on the CPU ([`is_straight`]), and passed to the shader as a flag in
-//! the slot code, so both twins agree by construction.
+//! the border point, so both twins agree by construction.
 //!
 //! [`expand`] mirrors `fat_border_position` in `shaders/fat_border_lib.wgsl` operation by
-//! operation, in f32; a test runs the WGSL function in a compute twin and compares.
+//! operation, in f32, and [`resolve`] / [`position`] mirror the vertex pulling
+//! (`fb_resolve`, `fat_border_vertex`); `tests/fat_border_twin.rs` runs the WGSL functions in
+//! a compute twin and compares.
 
 use glam::Vec3;
 
@@ -129,6 +132,7 @@ pub fn decode(code: u32) -> (u32, u32) {
 }
 
 /// A fan triangle: it contains v_i itself (slot 0 at end 0).
+#[cfg(test)]
 fn is_fan(tri: &[u32]) -> bool {
     tri.contains(&c(0, 0))
 }
@@ -203,50 +207,142 @@ pub fn expand(prev: Vec3, cur: Vec3, next: Vec3, eye: Vec3, eps: f32, code: u32)
     cur + eps * off - eps * d
 }
 
-/// One displaced fat-border vertex as the GPU gets it: border vertex v_i (with its
-/// neighbours, normal, ε, patch) and its slot code (slot 0 = v_i, 1..6 = v_i1..v_i6, plus
-/// [`STRAIGHT_FLAG`]).
+/// Bits of [`BorderPoint::info`]: the joint is straight ([`is_straight`]: its slots 1-3 and
+/// 4-6 sit at the mitre points, so its fans have zero area), the point opens its ring,
+/// closes its ring, is the ring's closing point (a copy of its first point, see
+/// [`BorderGeometry`]); the ring's length − 1 above [`RING_SHIFT`] (the neighbours of a
+/// ring's ends wrap around).
+pub const INFO_STRAIGHT: u32 = 1;
+pub const INFO_FIRST: u32 = 2;
+pub const INFO_LAST: u32 = 4;
+pub const INFO_CLOSING: u32 = 8;
+pub const RING_SHIFT: u32 = 4;
+
+/// One border vertex v_i as the GPU stores it (40 bytes, read from a storage buffer by
+/// `vs_border`): its position, its patch's ε, its normal, where it sits on its ring, and
+/// its patch's id and packed colour. The shader expands the displaced vertices from it and
+/// its ring neighbours.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct BorderVertex {
-    pub prev: [f32; 3],
+pub struct BorderPoint {
     pub cur: [f32; 3],
-    pub next: [f32; 3],
-    pub normal: [f32; 3],
     pub eps: f32,
+    pub normal: [f32; 3],
+    /// [`INFO_STRAIGHT`] | [`INFO_FIRST`] | [`INFO_LAST`] | [`INFO_CLOSING`] | (ring length
+    /// − 1) << [`RING_SHIFT`].
+    pub info: u32,
     pub patch_id: u32,
-    pub code: u32,
     /// The patch colour, packed (see `PatchMesh::color`).
     pub color: [u8; 4],
 }
 
-impl BorderVertex {
-    /// Where this vertex lands for an eye at `eye` (the CPU twin of the vertex shader).
-    pub fn expanded(&self, eye: Vec3) -> Vec3 {
-        expand(
-            self.prev.into(),
-            self.cur.into(),
-            self.next.into(),
-            eye,
-            self.eps,
-            self.code,
-        )
+/// Vertex indices per point: slot s of point k is vertex 8k + s.
+pub const SLOTS_PER_POINT: usize = 8;
+
+/// The 2-vertex variant's pattern: the paper's template with the next point's v2, v5 named
+/// slots 3, 6 (which the shader maps to 2, 5), so a closing point can collapse its own v2,
+/// v5 while the ring's last segment still reaches the first point's.
+const PATTERN_2: [u32; 6] = [c(0, 2), c(0, 5), c(1, 6), c(0, 2), c(1, 6), c(1, 3)];
+
+/// The triangle-list codes drawn once per point (see `c`): the templates of 6 and 4
+/// vertices, and [`PATTERN_2`].
+pub fn pattern(variant: FatBorders) -> &'static [u32] {
+    match variant {
+        FatBorders::Two => &PATTERN_2,
+        v => template(v),
     }
 }
 
-/// Slots per border vertex in [`BorderGeometry::vertices`].
-pub const SLOTS: usize = 7;
+/// Index `pattern(variant)` for points `0..points`: code (end, slot) of point k is vertex
+/// 8(k + end) + slot. One buffer of it serves every draw (offset by a base vertex).
+pub fn pattern_indices(variant: FatBorders, points: usize) -> Vec<u32> {
+    let codes = pattern(variant);
+    let mut out = Vec::with_capacity(points * codes.len());
+    for k in 0..points {
+        out.extend(codes.iter().map(|&code| {
+            let (end, slot) = decode(code);
+            ((k + end as usize) * SLOTS_PER_POINT) as u32 + slot
+        }));
+    }
+    out
+}
 
-/// Fat-border geometry for one flat indexed draw: every border vertex expanded to its 7
-/// slots, and per variant the triangle indices of the template (a triangle may use slots of
-/// the next border vertex, so neighbouring border vertices share displaced vertices and each
-/// is shaded once; zero-area fans of straight joints are left out). Unused slots are never
-/// indexed, hence never shaded.
+/// Point `k`, or a zero point past the end (the GPU's bounds-checked read).
+fn point(points: &[BorderPoint], k: usize) -> BorderPoint {
+    points.get(k).copied().unwrap_or_default()
+}
+
+/// Index of the ring neighbour before or after point `k` (`fb_neighbour` in WGSL).
+pub fn neighbour(points: &[BorderPoint], k: usize, after: bool) -> usize {
+    let info = point(points, k).info;
+    let span = (info >> RING_SHIFT) as usize;
+    match (after, info & INFO_FIRST != 0, info & INFO_LAST != 0) {
+        (false, true, _) => k.wrapping_add(span),
+        (false, false, _) => k.wrapping_sub(1),
+        (true, _, true) => k.wrapping_sub(span),
+        (true, _, false) => k.wrapping_add(1),
+    }
+}
+
+/// CPU twin of `fb_resolve` (WGSL): the point and slot whose displaced vertex vertex `i` of
+/// `variant`'s draw is. A closing point's slots 3 and 6 are its ring's first point's; its
+/// other slots coincide with them or with the next point's slot 6, so each of its triangles
+/// has two equal corners.
+pub fn resolve(points: &[BorderPoint], variant: FatBorders, i: usize) -> (usize, u32) {
+    let (mut p, mut s) = (i / SLOTS_PER_POINT, (i % SLOTS_PER_POINT) as u32);
+    let two = variant == FatBorders::Two;
+    if point(points, p).info & INFO_CLOSING != 0 {
+        (p, s) = match (two, s) {
+            (true, 2 | 5) | (false, 1) => (p.wrapping_add(1), 6),
+            (false, 0 | 2) => (p, 3),
+            (false, 4 | 5) => (p, 6),
+            _ => (p, s),
+        };
+        let info = point(points, p).info;
+        if info & INFO_CLOSING != 0 {
+            p = p.wrapping_sub((info >> RING_SHIFT) as usize + 1);
+        }
+    }
+    if two {
+        s = match s {
+            3 => 2,
+            6 => 5,
+            s => s,
+        };
+    }
+    (p, s)
+}
+
+/// CPU twin of `fat_border_vertex` (WGSL): where vertex `i` of `variant`'s draw lands for an
+/// eye at `eye`, and the point it is expanded from.
+pub fn position(points: &[BorderPoint], variant: FatBorders, i: usize, eye: Vec3) -> (Vec3, usize) {
+    let (p, slot) = resolve(points, variant, i);
+    let q = point(points, p);
+    let flag = if q.info & INFO_STRAIGHT != 0 {
+        STRAIGHT_FLAG
+    } else {
+        0
+    };
+    let at = |k: usize| Vec3::from(point(points, k).cur);
+    let (prev, next) = (neighbour(points, p, false), neighbour(points, p, true));
+    (
+        expand(at(prev), at(p), at(next), eye, q.eps, slot | flag),
+        p,
+    )
+}
+
+/// Fat-border geometry drawn by vertex pulling: every border vertex stored once
+/// ([`BorderPoint`], ring after ring, each ring followed by its closing point), the
+/// displaced vertices expanded from them in the vertex shader ([`resolve`], [`position`]),
+/// the triangles indexed by a pattern that depends only on the point's position
+/// ([`pattern_indices`], shared by every draw). The triangles with nonzero area, their
+/// vertices and their order are those of the paper's templates over each ring (§3.2; fans
+/// of straight joints and every triangle of a closing point have zero area and are never
+/// shaded), at 40 bytes per border vertex instead of seven 64-byte displaced vertices and
+/// three index lists.
 #[derive(Clone, Debug, Default)]
 pub struct BorderGeometry {
-    pub vertices: Vec<BorderVertex>,
-    /// Indices for [`FatBorders::Six`], [`FatBorders::Four`], [`FatBorders::Two`].
-    pub indices: [Vec<u32>; 3],
+    pub points: Vec<BorderPoint>,
 }
 
 impl BorderGeometry {
@@ -255,67 +351,74 @@ impl BorderGeometry {
     pub fn of<'a>(meshes: impl IntoIterator<Item = &'a PatchMesh>) -> BorderGeometry {
         let mut g = BorderGeometry::default();
         for m in meshes {
-            let eps = m.eps_border() as f32;
-            let color = super::upload::packed_color(m.color);
-            for ring in &m.borders {
-                let n = ring.len();
-                let base = g.vertices.len() as u32;
-                let mut straight = Vec::with_capacity(n);
-                for k in 0..n {
-                    let at = |o: usize| m.positions[ring[(k + o) % n] as usize];
-                    let (prev, cur, next) = (at(n - 1), at(0), at(1));
-                    let flat = is_straight(prev, cur, next);
-                    straight.push(flat);
-                    let flag = if flat { STRAIGHT_FLAG } else { 0 };
-                    for slot in 0..SLOTS as u32 {
-                        g.vertices.push(BorderVertex {
-                            prev: prev.into(),
-                            cur: cur.into(),
-                            next: next.into(),
-                            normal: m.normals[ring[k] as usize].into(),
-                            eps,
-                            patch_id: m.patch_id,
-                            code: slot | flag,
-                            color,
-                        });
-                    }
-                }
-                for (v, variant) in FatBorders::ALL_ON.iter().enumerate() {
-                    for (k, &flat) in straight.iter().enumerate() {
-                        for tri in template(*variant).chunks_exact(3) {
-                            if flat && is_fan(tri) {
-                                continue;
-                            }
-                            g.indices[v].extend(tri.iter().map(|&code| {
-                                let (end, slot) = decode(code);
-                                let j = (k + end as usize) % n;
-                                base + (j * SLOTS) as u32 + slot
-                            }));
-                        }
-                    }
-                }
-            }
+            g.append(m);
         }
         g
     }
 
-    pub fn indices(&self, variant: FatBorders) -> &[u32] {
-        match variant {
-            FatBorders::Off => &[],
-            FatBorders::Six => &self.indices[0],
-            FatBorders::Four => &self.indices[1],
-            FatBorders::Two => &self.indices[2],
+    /// Points [`BorderGeometry::append`] adds for `m`: its border vertices and a closing
+    /// point per ring.
+    pub fn points_of(m: &PatchMesh) -> usize {
+        m.borders
+            .iter()
+            .filter(|r| !r.is_empty())
+            .map(|r| r.len() + 1)
+            .sum()
+    }
+
+    /// Appends the border points of `m`.
+    pub fn append(&mut self, m: &PatchMesh) {
+        let eps = m.eps_border() as f32;
+        let color = super::upload::packed_color(m.color);
+        self.points.reserve(Self::points_of(m));
+        for ring in m.borders.iter().filter(|r| !r.is_empty()) {
+            let n = ring.len();
+            let span = (n as u32 - 1) << RING_SHIFT;
+            let first = self.points.len();
+            for k in 0..n {
+                let at = |o: usize| m.positions[ring[(k + o) % n] as usize];
+                let mut info = span;
+                if is_straight(at(n - 1), at(0), at(1)) {
+                    info |= INFO_STRAIGHT;
+                }
+                if k == 0 {
+                    info |= INFO_FIRST;
+                }
+                if k + 1 == n {
+                    info |= INFO_LAST;
+                }
+                self.points.push(BorderPoint {
+                    cur: at(0).into(),
+                    eps,
+                    normal: m.normals[ring[k] as usize].into(),
+                    info,
+                    patch_id: m.patch_id,
+                    color,
+                });
+            }
+            let closing = BorderPoint {
+                info: INFO_CLOSING | span,
+                ..self.points[first]
+            };
+            self.points.push(closing);
         }
     }
 
-    /// The fat-border triangles for an eye at `eye`, expanded on the CPU (world positions).
+    /// Indices of `variant`'s draw.
+    pub fn index_count(&self, variant: FatBorders) -> usize {
+        self.points.len() * pattern(variant).len()
+    }
+
+    /// The fat-border triangles with nonzero area for an eye at `eye`, expanded on the CPU
+    /// (world positions), in draw order.
     pub fn triangles(&self, variant: FatBorders, eye: Vec3) -> Vec<[Vec3; 3]> {
-        self.indices(variant)
+        pattern_indices(variant, self.points.len())
             .chunks_exact(3)
             .map(|t| {
-                let v = |k: usize| self.vertices[t[k] as usize].expanded(eye);
+                let v = |k: usize| position(&self.points, variant, t[k] as usize, eye).0;
                 [v(0), v(1), v(2)]
             })
+            .filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
             .collect()
     }
 }
@@ -439,23 +542,94 @@ mod tests {
     #[test]
     fn straight_joints_drop_their_fans() {
         let g = BorderGeometry::of(&[loop_mesh(0.05)]);
+        let real = |p: &&BorderPoint| p.info & INFO_CLOSING == 0;
         let straight = g
-            .vertices
+            .points
             .iter()
-            .step_by(SLOTS)
-            .filter(|v| v.code & STRAIGHT_FLAG != 0)
+            .filter(real)
+            .filter(|p| p.info & INFO_STRAIGHT != 0)
             .count();
         assert!(straight >= 8, "{straight}");
-        let border_vertices = g.vertices.len() / SLOTS;
+        let n = g.points.iter().filter(real).count();
+        assert_eq!(g.points.len(), n + 1);
+        let eye = Vec3::new(1.0, 0.5, 20.0);
+        let tris = |v| g.triangles(v, eye).len();
+        assert_eq!(tris(FatBorders::Six), 6 * n - 4 * straight);
+        assert_eq!(tris(FatBorders::Four), 4 * n - 2 * straight);
+        assert_eq!(tris(FatBorders::Two), 2 * n);
+    }
+
+    /// The triangles of the indexed templates, expanded directly from the mesh's rings (fans
+    /// of straight joints left out): what the vertex-pulling draw must reproduce, triangle
+    /// by triangle, in order.
+    fn indexed(meshes: &[PatchMesh], variant: FatBorders, eye: Vec3) -> Vec<[Vec3; 3]> {
+        let mut out = Vec::new();
+        for m in meshes {
+            let eps = m.eps_border() as f32;
+            for ring in &m.borders {
+                let n = ring.len();
+                let at = |k: usize| m.positions[ring[k % n] as usize];
+                let flat = |k: usize| is_straight(at(k + n - 1), at(k), at(k + 1));
+                let point = |k: usize, slot: u32| {
+                    let flag = if flat(k) { STRAIGHT_FLAG } else { 0 };
+                    expand(at(k + n - 1), at(k), at(k + 1), eye, eps, slot | flag)
+                };
+                for k in 0..n {
+                    for tri in template(variant).chunks_exact(3) {
+                        if flat(k) && is_fan(tri) {
+                            continue;
+                        }
+                        let v = |c: usize| {
+                            let (end, slot) = decode(tri[c]);
+                            point(k + end as usize, slot)
+                        };
+                        out.push([v(0), v(1), v(2)]);
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn pulled_triangles_are_the_indexed_templates_in_order() {
+        let mut meshes = vec![loop_mesh(0.05), loop_mesh(0.02)];
+        // A second ring on the first mesh, and rings of one and two points.
+        meshes[0].borders.push(vec![3, 7, 12, 1]);
+        meshes[1].borders.push(vec![5]);
+        meshes[1].borders.push(vec![2, 9]);
+        let g = BorderGeometry::of(&meshes);
         assert_eq!(
-            g.indices(FatBorders::Six).len() / 3,
-            6 * border_vertices - 4 * straight
+            g.points.len(),
+            meshes.iter().map(BorderGeometry::points_of).sum::<usize>()
         );
-        assert_eq!(
-            g.indices(FatBorders::Four).len() / 3,
-            4 * border_vertices - 2 * straight
-        );
-        assert_eq!(g.indices(FatBorders::Two).len() / 3, 2 * border_vertices);
+        for eye in [Vec3::new(1.0, 0.5, 20.0), Vec3::new(-3.0, 4.0, 0.5)] {
+            for variant in FatBorders::ALL_ON {
+                let want: Vec<[Vec3; 3]> = indexed(&meshes, variant, eye)
+                    .into_iter()
+                    .filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
+                    .collect();
+                assert_eq!(g.triangles(variant, eye), want, "{variant}");
+            }
+        }
+    }
+
+    #[test]
+    fn closing_points_stand_for_their_rings_first_point() {
+        let g = BorderGeometry::of(&[loop_mesh(0.05)]);
+        let d = g.points.len() - 1;
+        assert!(g.points[d].info & INFO_CLOSING != 0);
+        let eye = Vec3::new(0.3, 0.2, 9.0);
+        for variant in FatBorders::ALL_ON {
+            for slot in [3, 6] {
+                let (p, _) = resolve(&g.points, variant, d * SLOTS_PER_POINT + slot);
+                assert_eq!(p, 0, "{variant} slot {slot}");
+                assert_eq!(
+                    position(&g.points, variant, d * SLOTS_PER_POINT + slot, eye),
+                    position(&g.points, variant, slot, eye)
+                );
+            }
+        }
     }
 
     #[test]

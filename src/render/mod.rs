@@ -24,7 +24,7 @@ pub mod resident;
 pub mod shaders;
 mod upload;
 
-pub use fat_border::{BorderGeometry, BorderVertex, FatBorders};
+pub use fat_border::{BorderGeometry, BorderPoint, FatBorders};
 pub use gpu::{Gpu, RenderError};
 pub use resident::{ResidentGeometry, UploadStats};
 pub use upload::GpuMeshes;
@@ -114,6 +114,33 @@ impl std::str::FromStr for Primitives {
                 Primitives::NAMES
             )),
         }
+    }
+}
+
+/// Points one draw of fat borders covers at most (the length of the index patterns).
+pub(crate) const PATTERN_POINTS: usize = 32768;
+
+/// Records the fat-border draws of `variant` over points `start..start + count` of the bound
+/// points buffer: the variant's pattern, offset by a base vertex, at most [`PATTERN_POINTS`]
+/// points per draw.
+fn draw_points(
+    pass: &mut wgpu::RenderPass<'_>,
+    patterns: &[wgpu::Buffer; 3],
+    variant: FatBorders,
+    start: u32,
+    count: u32,
+) {
+    let Some(v) = FatBorders::ALL_ON.iter().position(|&x| x == variant) else {
+        return;
+    };
+    let codes = fat_border::pattern(variant).len() as u32;
+    pass.set_index_buffer(patterns[v].slice(..), wgpu::IndexFormat::Uint32);
+    let mut done = 0;
+    while done < count {
+        let n = (count - done).min(PATTERN_POINTS as u32);
+        let base = (start + done) as usize * fat_border::SLOTS_PER_POINT;
+        pass.draw_indexed(0..n * codes, base as i32, 0..1);
+        done += n;
     }
 }
 
@@ -234,6 +261,12 @@ pub struct Renderer {
     module: wgpu::ShaderModule,
     layout: wgpu::PipelineLayout,
     bind_layout: wgpu::BindGroupLayout,
+    /// The fat-border pipeline's: globals, then the border points (a storage buffer).
+    border_layout: wgpu::PipelineLayout,
+    points_layout: wgpu::BindGroupLayout,
+    /// The fat-border index patterns ([`fat_border::pattern_indices`]) of the 6-, 4- and
+    /// 2-vertex variants over [`PATTERN_POINTS`] points.
+    patterns: [wgpu::Buffer; 3],
     pipelines: HashMap<Target, Pipelines>,
     /// Render targets, kept between frames of the same size.
     targets: HashMap<Target, Targets>,
@@ -285,15 +318,44 @@ impl Renderer {
             bind_group_layouts: &[Some(&bind_layout)],
             immediate_size: 0,
         });
+        let points_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("fat border points"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::VERTEX,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Storage { read_only: true },
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            }],
+        });
+        let border_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("fat borders"),
+            bind_group_layouts: &[Some(&bind_layout), Some(&points_layout)],
+            immediate_size: 0,
+        });
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(RenderError::Gpu(e.to_string()));
         }
+        let patterns = FatBorders::ALL_ON.map(|v| {
+            upload::buffer_init(
+                device,
+                "fat border pattern",
+                bytemuck::cast_slice(&fat_border::pattern_indices(v, PATTERN_POINTS)),
+                wgpu::BufferUsages::INDEX,
+            )
+        });
         let gpu_backend = gpu.info.backend;
         Ok(Renderer {
             gpu,
             module,
             layout,
             bind_layout,
+            border_layout,
+            points_layout,
+            patterns,
             pipelines: HashMap::new(),
             targets: HashMap::new(),
             statics: Mutex::new(HashMap::new()),
@@ -311,6 +373,28 @@ impl Renderer {
 
     pub fn gpu(&self) -> &Gpu {
         &self.gpu
+    }
+
+    /// The bind group of a buffer of border points ([`BorderPoint`]s) for the fat-border
+    /// pipeline.
+    pub(super) fn points_bind_group(&self, points: &wgpu::Buffer) -> wgpu::BindGroup {
+        self.gpu
+            .device
+            .create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("fat border points"),
+                layout: &self.points_layout,
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: points.as_entire_binding(),
+                }],
+            })
+    }
+
+    /// Bytes of border points one binding (one buffer) may hold: the device's largest
+    /// storage binding, at most its largest buffer.
+    pub(super) fn max_points_bytes(&self) -> u64 {
+        let l = self.gpu.device.limits();
+        l.max_storage_buffer_binding_size.min(l.max_buffer_size)
     }
 
     /// GPU wait and bytes written by the last [`Renderer::render`].

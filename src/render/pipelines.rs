@@ -143,21 +143,13 @@ impl Renderer {
         let surface_attrs = wgpu::vertex_attr_array![
             0 => Float32x3, 1 => Float32x3, 2 => Uint32, 3 => Unorm8x4
         ];
-        let border_attrs = wgpu::vertex_attr_array![
-            0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Float32x3,
-            4 => Float32, 5 => Uint32, 6 => Uint32, 7 => Unorm8x4
-        ];
         let surface_buffers = [Some(wgpu::VertexBufferLayout {
             array_stride: std::mem::size_of::<SurfaceVertex>() as u64,
             step_mode: wgpu::VertexStepMode::Vertex,
             attributes: &surface_attrs,
         })];
-        let border_buffers = [Some(wgpu::VertexBufferLayout {
-            array_stride: std::mem::size_of::<BorderVertex>() as u64,
-            step_mode: wgpu::VertexStepMode::Vertex,
-            attributes: &border_attrs,
-        })];
         let make = |label: &str,
+                    layout: &wgpu::PipelineLayout,
                     vs: &str,
                     buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
                     strip: bool| {
@@ -165,7 +157,7 @@ impl Renderer {
                 .device
                 .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                     label: Some(label),
-                    layout: Some(&self.layout),
+                    layout: Some(layout),
                     vertex: wgpu::VertexState {
                         module: &self.module,
                         entry_point: Some(vs),
@@ -208,9 +200,22 @@ impl Renderer {
                 })
         };
         Pipelines {
-            surface: make("surface", "vs_surface", &surface_buffers, false),
-            surface_strip: make("surface strips", "vs_surface", &surface_buffers, true),
-            border: make("fat border", "vs_border", &border_buffers, false),
+            surface: make(
+                "surface",
+                &self.layout,
+                "vs_surface",
+                &surface_buffers,
+                false,
+            ),
+            surface_strip: make(
+                "surface strips",
+                &self.layout,
+                "vs_surface",
+                &surface_buffers,
+                true,
+            ),
+            // Vertex pulling from the border points: no vertex buffers.
+            border: make("fat border", &self.border_layout, "vs_border", &[], false),
         }
     }
 }

@@ -7,40 +7,47 @@
 //! whenever one patch changes (what [`Renderer::upload`] does) makes the frame cost follow
 //! the scene; here it follows what changed.
 //!
-//! **Design.** Seven buffers (surface vertices, surface list indices, strip indices, fat-border
-//! vertices, fat-border indices for the 6-, 4- and 2-vertex variants), each a
-//! [`pool::Pool`]: one `wgpu::Buffer` suballocated by an [`Allocator`] (first fit over a
-//! coalesced free list). A pool that runs out of free units grows by reallocation: a new
-//! buffer at least 1.5× larger, the old contents copied on the GPU (`copy_buffer_to_buffer`),
-//! every range where it was. When the free units suffice but no free range is long enough
-//! (fragmentation), or when a quarter of it is free in many small ranges, the pool is
-//! compacted: its live ranges packed into a new buffer in patch order, and the patches whose
-//! vertices moved get their index streams written again (indices are stored already offset by
-//! the patch's vertex base, so a moved vertex range invalidates them).
+//! **Design.** Four streams (surface vertices, surface list indices, strip indices, fat-border
+//! points — one [`super::BorderPoint`] per border vertex, expanded in the vertex shader), each
+//! a [`pool::Pool`]: one `wgpu::Buffer` suballocated by an [`Allocator`] (first fit over a
+//! coalesced free list). The four pools form an **arena**; a patch's streams all live in one
+//! arena (its indices refer to that arena's vertices). A pool that runs out of free units
+//! grows by reallocation: a new buffer at least 1.5× larger, the old contents copied on the
+//! GPU (`copy_buffer_to_buffer`), every range where it was — up to the device's largest
+//! buffer (for the points: its largest storage binding); a patch that fits no arena opens a
+//! new one, so a scene larger than one buffer still draws ([`RenderError::TooLarge`] only
+//! for one patch larger than an empty arena). When the free units suffice but no free range
+//! is long enough (fragmentation), or when a quarter of a pool is free in many small ranges,
+//! the pool is compacted: its live ranges packed into a new buffer in patch order, and the
+//! patches whose vertices moved get their index streams written again (indices are stored
+//! already offset by the patch's vertex base, so a moved vertex range invalidates them).
 //!
-//! Per scene patch a slot holds its ranges and the `Arc<PatchMesh>` it was built from (held,
-//! so the identity cannot be reused by another mesh). [`ResidentGeometry::update`] walks the
-//! patches in the frustum only when the frame loop's generation changed; a patch whose mesh
-//! is the one its slot holds uploads nothing. The changed ones are built on the CPU in
-//! parallel (rayon: surface vertices, list indices or strips, [`BorderGeometry`] of that one
-//! patch), their old ranges freed, new ones allocated and written: the contiguous ranges of
-//! one pool in one `write_buffer`. Patches leaving the frustum stay resident (at most one
-//! tessellation per patch, as the frame loop keeps on the CPU).
+//! Per scene patch a slot holds its arena, its ranges and the `Arc<PatchMesh>` it was built
+//! from (held, so the identity cannot be reused by another mesh). [`ResidentGeometry::update`]
+//! walks the patches in the frustum only when the frame loop's generation changed; a patch
+//! whose mesh is the one its slot holds uploads nothing. The changed ones are built on the
+//! CPU in parallel (rayon: surface vertices, list indices or strips, the [`BorderGeometry`]
+//! of that one patch), [`BATCH`] patches at a time so the CPU copies stay bounded, their old
+//! ranges freed, new ones allocated and written: the contiguous ranges of one pool in one
+//! `write_buffer`; the CPU copies are dropped once written. Patches leaving the frustum stay
+//! resident (at most one tessellation per patch, as the frame loop keeps on the CPU).
 //!
 //! **Draws.** The draw list is rebuilt from the patches in the frustum (cost ∝ patches drawn)
-//! when the generation changed: per index stream, in patch order, ranges adjacent in the
-//! buffer merged into one draw. Re-tessellated patches land wherever first fit puts them, so
+//! when the generation changed: per stream, in patch order, ranges adjacent in the same
+//! arena merged into one draw. Re-tessellated patches land wherever first fit puts them, so
 //! the draws split over the frames (on grid32, 20 000 after ten frames, each ~35 µs on
-//! lavapipe); past [`PACK_DRAWS`] the index pools are packed with the drawn patches in front,
-//! in draw order — a GPU-side copy, the indices keep their values — and each stream is one
-//! draw again. Strips are stored as self-contained blocks that concatenate:
-//! ending in a restart (primitive restart), or, joined by zero-area windows
-//! ([`Join::Degenerate`]), opening with the first index twice more and padded to an even
-//! length, so every strip keeps its parity inside a merged draw. With indirect draws
-//! (`Gpu::indirect`) the ranges become one `DrawIndexedIndirectArgs` each, written once per
-//! rebuild, and every stream is one `multi_draw_indexed_indirect`; otherwise a loop of
-//! `draw_indexed`. Mesh-patch cuts drawn from their hierarchies' static buffers
-//! ([`Renderer::draws_static`]) keep that path; only their fat borders are resident.
+//! lavapipe); past [`PACK_DRAWS`] the pools are packed with the drawn patches in front, in
+//! draw order — a GPU-side copy, the indices keep their values — and each stream is one draw
+//! per arena again. Strips are stored as self-contained blocks that concatenate: ending in a
+//! restart (primitive restart), or, joined by zero-area windows ([`Join::Degenerate`]),
+//! opening with the first index twice more and padded to an even length, so every strip
+//! keeps its parity inside a merged draw. Fat borders are non-indexed draws over ranges of
+//! points (T vertices per point for a template of T codes). With indirect draws
+//! (`Gpu::indirect`) the ranges become one `DrawIndexedIndirectArgs` (surfaces) or three
+//! `DrawIndirectArgs` (fat borders, one per variant) each, written once per rebuild, and each
+//! run of one arena is one `multi_draw_*_indirect`; otherwise a loop of draws. Mesh-patch
+//! cuts drawn from their hierarchies' static buffers ([`Renderer::draws_static`]) keep that
+//! path; only their fat borders are resident.
 //!
 //! The result is the same picture as [`Renderer::upload`] bit for bit: the same triangles
 //! with the same vertices, in the same order, each strip with its orientation
@@ -51,6 +58,7 @@
 //! shrink; patches that left the frustum are not evicted.
 
 mod alloc;
+mod draws;
 mod pool;
 
 pub use alloc::{Allocator, Move};
@@ -58,23 +66,24 @@ pub use alloc::{Allocator, Move};
 use std::collections::HashMap;
 
 use super::pipelines::Pipelines;
-use super::upload::{
-    DRAW_ARGS_BYTES, StaticPatch, SurfaceVertex, encode_statics, offset_indices, packed_color,
-    strips_of, surface_vertices,
-};
+use super::upload::{SurfaceVertex, offset_indices, packed_color, strips_of, surface_vertices};
 use super::*;
 use crate::strips::RESTART;
+use draws::DrawList;
 use pool::Pool;
 
 const VERTICES: usize = 0;
 const LIST: usize = 1;
 const STRIPS: usize = 2;
-const BORDER_VERTICES: usize = 3;
-/// Fat-border index streams for [`FatBorders::Six`], `Four`, `Two`.
-const BORDER: [usize; 3] = [4, 5, 6];
-const STREAMS: usize = 7;
-/// The index streams, in draw order.
-const INDEX_STREAMS: [usize; 5] = [LIST, STRIPS, BORDER[0], BORDER[1], BORDER[2]];
+/// Fat-border points ([`BorderPoint`]).
+const POINTS: usize = 3;
+const STREAMS: usize = 4;
+/// The streams drawn, in draw order.
+const DRAWN_STREAMS: [usize; 3] = [LIST, STRIPS, POINTS];
+
+/// Patches built on the CPU at a time: their copies are written and dropped before the next
+/// batch is built.
+pub const BATCH: usize = 4096;
 
 /// What one [`ResidentGeometry::update`] did. Every byte given to `write_buffer` is counted
 /// in exactly one field of [`UploadStats::uploaded_bytes`]; GPU-side copies are not uploads.
@@ -82,15 +91,15 @@ const INDEX_STREAMS: [usize; 5] = [LIST, STRIPS, BORDER[0], BORDER[1], BORDER[2]
 pub struct UploadStats {
     /// Patches whose mesh was (re-)uploaded.
     pub patches: usize,
-    /// Their geometry: surface vertices, list or strip indices, fat-border vertices and the
-    /// indices of all three variants.
+    /// Their geometry: surface vertices, list or strip indices and fat-border points.
     pub geometry_bytes: u64,
     /// Index streams written again for patches whose vertices a compaction moved.
     pub reindexed_bytes: u64,
     /// Static buffers of mesh-patch hierarchies built on first use.
     pub static_bytes: u64,
-    /// Indirect draw arguments (one `DrawIndexedIndirectArgs`, 20 bytes, per merged draw),
-    /// written when the draw list was rebuilt on a device that draws indirect.
+    /// Indirect draw arguments (per merged draw one `DrawIndexedIndirectArgs`, 20 bytes; for
+    /// fat borders one per variant), written when the draw list was rebuilt on a device that
+    /// draws indirect.
     pub args_bytes: u64,
     /// Bytes copied on the GPU by growth and compaction.
     pub copied_bytes: u64,
@@ -107,10 +116,28 @@ impl UploadStats {
     }
 }
 
+/// GPU memory of the resident geometry.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ResidentMemory {
+    pub arenas: usize,
+    /// Bytes of the pools' buffers, per stream: surface vertices, list indices, strip
+    /// indices, fat-border points.
+    pub capacity: [u64; STREAMS],
+    /// Of which in live ranges.
+    pub used: [u64; STREAMS],
+}
+
+impl ResidentMemory {
+    pub fn capacity_total(&self) -> u64 {
+        self.capacity.iter().sum()
+    }
+}
+
 /// What a patch's slot holds.
 #[derive(Clone, Debug, Default)]
 struct Slot {
     mesh: Option<Arc<PatchMesh>>,
+    arena: usize,
     /// Per stream `(start, len)` in units of its pool.
     ranges: [Option<(u64, u64)>; STREAMS],
     /// The patch's strips (local indices), kept to write them again after a compaction.
@@ -169,7 +196,11 @@ impl Built {
                 .as_ref()
                 .map_or_else(Vec::new, |s| strip_block(s, renderer.strip_join)),
             strips,
-            borders: BorderGeometry::of(std::iter::once(m)),
+            borders: if reindex {
+                BorderGeometry::default()
+            } else {
+                BorderGeometry::of(std::iter::once(m))
+            },
         }
     }
 
@@ -179,29 +210,23 @@ impl Built {
             VERTICES => self.vertices.len(),
             LIST => self.list.len(),
             STRIPS => self.strip_block.len(),
-            BORDER_VERTICES => self.borders.vertices.len(),
-            _ => self.borders.indices[p - BORDER[0]].len(),
+            _ => self.borders.points.len(),
         }) as u64
     }
 
-    /// Appends stream `p`'s bytes, indices offset by the slot's vertex bases.
+    /// Appends stream `p`'s bytes, indices offset by the slot's vertex base.
     fn append(&self, p: usize, slot: &Slot, out: &mut Vec<u8>) {
-        let base = |s: usize| slot.ranges[s].map_or(0, |r| r.0 as u32);
+        let base = slot.ranges[VERTICES].map_or(0, |r| r.0 as u32);
         match p {
             VERTICES => out.extend_from_slice(bytemuck::cast_slice(&self.vertices)),
-            LIST => offset_indices(&self.list, base(VERTICES), out),
-            STRIPS => offset_indices(&self.strip_block, base(VERTICES), out),
-            BORDER_VERTICES => out.extend_from_slice(bytemuck::cast_slice(&self.borders.vertices)),
-            _ => offset_indices(
-                &self.borders.indices[p - BORDER[0]],
-                base(BORDER_VERTICES),
-                out,
-            ),
+            LIST => offset_indices(&self.list, base, out),
+            STRIPS => offset_indices(&self.strip_block, base, out),
+            _ => out.extend_from_slice(bytemuck::cast_slice(&self.borders.points)),
         }
     }
 }
 
-/// Draws of the index streams past which their pools are packed in draw order.
+/// Draws of the drawn streams past which their pools are packed in draw order.
 const PACK_DRAWS: usize = 256;
 
 /// Whether a pool is worth packing: a quarter or more of it free, in more than 64 ranges,
@@ -241,36 +266,6 @@ fn strip_block(local: &[u32], join: Join) -> Vec<u32> {
     }
 }
 
-/// Per-frame draws: merged ranges per index stream and the static patches' ranges.
-#[derive(Debug, Default)]
-struct DrawList {
-    /// `[first index, index count]` per stream (empty for the vertex streams).
-    ranges: [Vec<[u32; 2]>; STREAMS],
-    /// First entry of each stream's ranges in the indirect arguments.
-    first_arg: [u32; STREAMS],
-    statics: Vec<(Arc<StaticPatch>, u32, u32)>,
-    static_ranges: Vec<[u32; 2]>,
-    statics_first_arg: u32,
-}
-
-impl DrawList {
-    fn push(ranges: &mut Vec<[u32; 2]>, (start, len): (u64, u64)) {
-        let (start, len) = (start as u32, len as u32);
-        match ranges.last_mut() {
-            Some(last) if last[0] + last[1] == start => last[1] += len,
-            _ => ranges.push([start, len]),
-        }
-    }
-
-    fn draw_count(&self) -> usize {
-        INDEX_STREAMS
-            .iter()
-            .map(|&p| self.ranges[p].len())
-            .sum::<usize>()
-            + self.static_ranges.len()
-    }
-}
-
 /// A fault to inject (tests prove they can fail with it).
 #[doc(hidden)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -281,6 +276,64 @@ pub enum Fault {
     KeepFirstStale,
 }
 
+/// One buffer per stream; a patch's streams all live in one arena.
+#[derive(Debug)]
+struct Arena {
+    pools: [Pool; STREAMS],
+    /// The bind group of the points pool's buffer, and that buffer.
+    points_bind: (wgpu::Buffer, wgpu::BindGroup),
+}
+
+impl Arena {
+    /// Empty pools, each at most `max_bytes` (or what the device allows).
+    fn new(renderer: &Renderer, max_bytes: Option<u64>) -> Arena {
+        let gpu = &renderer.gpu;
+        let limit = |device: u64| max_bytes.map_or(device, |m| m.min(device));
+        let buffer_max = limit(gpu.device.limits().max_buffer_size);
+        let points_max = limit(renderer.max_points_bytes());
+        let (v, i) = (wgpu::BufferUsages::VERTEX, wgpu::BufferUsages::INDEX);
+        let unit = |size: usize| size as u64;
+        let pools = [
+            Pool::new(
+                gpu,
+                "resident vertices",
+                v,
+                unit(size_of::<SurfaceVertex>()),
+                buffer_max,
+            ),
+            Pool::new(gpu, "resident list indices", i, 4, buffer_max),
+            Pool::new(gpu, "resident strip indices", i, 4, buffer_max),
+            Pool::new(
+                gpu,
+                "resident fat border points",
+                wgpu::BufferUsages::STORAGE,
+                unit(size_of::<BorderPoint>()),
+                points_max,
+            ),
+        ];
+        let buffer = pools[POINTS].buffer.clone();
+        let bind = renderer.points_bind_group(&buffer);
+        Arena {
+            pools,
+            points_bind: (buffer, bind),
+        }
+    }
+
+    /// Whether `lens` more units (per stream) fit under the pools' largest sizes.
+    fn fits(&self, lens: &[u64; STREAMS]) -> bool {
+        self.pools.iter().zip(lens).all(|(p, &n)| p.fits(n))
+    }
+
+    /// Binds the points pool's current buffer (after growth or compaction replaced it).
+    fn rebind(&mut self, renderer: &Renderer) {
+        if self.points_bind.0 != self.pools[POINTS].buffer {
+            let buffer = self.pools[POINTS].buffer.clone();
+            let bind = renderer.points_bind_group(&buffer);
+            self.points_bind = (buffer, bind);
+        }
+    }
+}
+
 /// Patch geometry resident on the GPU between frames (see the module doc). Per-view state:
 /// owned by a `frame::FrameState`, bound to the device of the renderer that last updated it.
 #[derive(Debug)]
@@ -288,7 +341,7 @@ pub struct ResidentGeometry {
     device: wgpu::Device,
     /// The renderer settings the slots were built with (primitives, strip join, static arcs).
     config: (Primitives, Join, bool),
-    pools: [Pool; STREAMS],
+    arenas: Vec<Arena>,
     slots: Vec<Slot>,
     generation: Option<u64>,
     /// The patches of the last update (scene indices, in order).
@@ -298,54 +351,61 @@ pub struct ResidentGeometry {
     args: Option<wgpu::Buffer>,
     #[doc(hidden)]
     pub fault: Fault,
+    /// Largest bytes of one pool's buffer (tests: many arenas on a small scene); `None`:
+    /// what the device allows.
+    #[doc(hidden)]
+    pub arena_bytes: Option<u64>,
 }
 
 impl ResidentGeometry {
     /// Empty pools on `renderer`'s device.
     pub fn new(renderer: &Renderer) -> ResidentGeometry {
-        let gpu = &renderer.gpu;
-        let (v, i) = (wgpu::BufferUsages::VERTEX, wgpu::BufferUsages::INDEX);
-        let unit = |size: usize| size as u64;
         ResidentGeometry {
-            device: gpu.device.clone(),
+            device: renderer.gpu.device.clone(),
             config: (
                 renderer.primitives,
                 renderer.strip_join,
                 renderer.static_arcs,
             ),
-            pools: [
-                Pool::new(
-                    gpu,
-                    "resident vertices",
-                    v,
-                    unit(size_of::<SurfaceVertex>()),
-                ),
-                Pool::new(gpu, "resident list indices", i, 4),
-                Pool::new(gpu, "resident strip indices", i, 4),
-                Pool::new(
-                    gpu,
-                    "resident fat border vertices",
-                    v,
-                    unit(size_of::<BorderVertex>()),
-                ),
-                Pool::new(gpu, "resident fat border indices 6", i, 4),
-                Pool::new(gpu, "resident fat border indices 4", i, 4),
-                Pool::new(gpu, "resident fat border indices 2", i, 4),
-            ],
+            arenas: Vec::new(),
             slots: Vec::new(),
             generation: None,
             drawn: Vec::new(),
             draws: DrawList::default(),
             args: None,
             fault: Fault::None,
+            arena_bytes: None,
         }
+    }
+
+    /// A fresh geometry with this one's test settings.
+    fn reset(&mut self, renderer: &Renderer) {
+        let (fault, arena_bytes) = (self.fault, self.arena_bytes);
+        *self = ResidentGeometry::new(renderer);
+        self.fault = fault;
+        self.arena_bytes = arena_bytes;
+    }
+
+    /// GPU memory held (capacity and live bytes per stream).
+    pub fn memory(&self) -> ResidentMemory {
+        let mut m = ResidentMemory {
+            arenas: self.arenas.len(),
+            ..ResidentMemory::default()
+        };
+        for a in &self.arenas {
+            for (p, pool) in a.pools.iter().enumerate() {
+                m.capacity[p] += pool.bytes();
+                m.used[p] += pool.alloc.used() * pool.unit;
+            }
+        }
+        m
     }
 
     /// Makes the patches `meshes` (scene index, mesh; the patches to draw, in scene order)
     /// resident and the draw list theirs. Nothing is walked when `generation` (the frame
     /// loop's, which changes whenever the meshes to draw change) is the last one seen. A
-    /// pool that would pass the device's largest buffer is [`RenderError::TooLarge`]; the
-    /// geometry is then emptied (the next update starts afresh).
+    /// patch larger than an empty arena is [`RenderError::TooLarge`]; the geometry is then
+    /// emptied (the next update starts afresh).
     pub fn update<'a>(
         &mut self,
         renderer: &Renderer,
@@ -358,9 +418,7 @@ impl ResidentGeometry {
             renderer.static_arcs,
         );
         if self.device != renderer.gpu.device || self.config != config {
-            let fault = self.fault;
-            *self = ResidentGeometry::new(renderer);
-            self.fault = fault;
+            self.reset(renderer);
         }
         let mut stats = UploadStats::default();
         if self.generation == Some(generation) {
@@ -388,16 +446,16 @@ impl ResidentGeometry {
         }
         if !changed.is_empty() {
             renderer.strips.begin_upload();
-            let built: Vec<Built> = changed
-                .par_iter()
-                .map(|&(i, m)| Built::new(renderer, i, m, None, false))
-                .collect();
-            stats.patches = built.len();
-            if let Err(e) = self.place(renderer, built, &mut stats) {
-                let fault = self.fault;
-                *self = ResidentGeometry::new(renderer);
-                self.fault = fault;
-                return Err(e);
+            for batch in changed.chunks(BATCH) {
+                let built: Vec<Built> = batch
+                    .par_iter()
+                    .map(|&(i, m)| Built::new(renderer, i, m, None, false))
+                    .collect();
+                stats.patches += built.len();
+                if let Err(e) = self.place(renderer, built, &mut stats) {
+                    self.reset(renderer);
+                    return Err(e);
+                }
             }
         }
         self.drawn = drawn.iter().map(|d| d.0).collect();
@@ -407,7 +465,8 @@ impl ResidentGeometry {
         Ok(stats)
     }
 
-    /// Frees the changed slots' ranges, allocates and writes the new ones.
+    /// Frees the changed slots' ranges, picks each an arena (the first its streams fit in,
+    /// or a new one), allocates and writes the new ranges.
     fn place(
         &mut self,
         renderer: &Renderer,
@@ -419,34 +478,70 @@ impl ResidentGeometry {
             let slot = &mut self.slots[b.slot];
             for (p, range) in slot.ranges.iter_mut().enumerate() {
                 if let Some((start, _)) = range.take() {
-                    self.pools[p].alloc.free_range(start);
+                    self.arenas[slot.arena].pools[p].alloc.free_range(start);
                 }
             }
             slot.mesh = Some(b.mesh.clone());
             slot.strips = b.strips.clone();
             slot.is_static = b.is_static;
         }
-        let mut moved = Vec::new();
-        for p in 0..STREAMS {
-            let needed: u64 = built.iter().map(|b| b.len(p)).sum();
-            if needed == 0 {
-                continue;
+        // Arenas: the first with room for all of a patch's streams (counting this batch).
+        let mut wanted: Vec<[u64; STREAMS]> = vec![[0; STREAMS]; self.arenas.len()];
+        for b in &built {
+            let lens: [u64; STREAMS] = std::array::from_fn(|p| b.len(p));
+            let fits =
+                |a: &Arena, w: &[u64; STREAMS]| a.fits(&std::array::from_fn(|p| w[p] + lens[p]));
+            let found = (0..self.arenas.len()).find(|&a| fits(&self.arenas[a], &wanted[a]));
+            let a = match found {
+                Some(a) => a,
+                None => {
+                    let arena = Arena::new(renderer, self.arena_bytes);
+                    if !arena.fits(&lens) {
+                        let p = (0..STREAMS)
+                            .find(|&p| !arena.pools[p].fits(lens[p]))
+                            .unwrap_or(0);
+                        let pool = &arena.pools[p];
+                        return Err(RenderError::TooLarge {
+                            what: pool.label,
+                            bytes: lens[p] * pool.unit,
+                            limit: pool.max_units * pool.unit,
+                        });
+                    }
+                    self.arenas.push(arena);
+                    wanted.push([0; STREAMS]);
+                    self.arenas.len() - 1
+                }
+            };
+            self.slots[b.slot].arena = a;
+            for p in 0..STREAMS {
+                wanted[a][p] += lens[p];
             }
-            let copied = self.pools[p].reserve(gpu, needed)?;
-            stats.copied_bytes += copied;
-            stats.grown += usize::from(copied > 0);
-            for b in &built {
+        }
+        let mut moved = Vec::new();
+        for (a, want) in wanted.iter().enumerate() {
+            for (p, &needed) in want.iter().enumerate() {
+                if needed == 0 {
+                    continue;
+                }
+                let copied = self.arenas[a].pools[p].reserve(gpu, needed)?;
+                stats.copied_bytes += copied;
+                stats.grown += usize::from(copied > 0);
+            }
+        }
+        for b in &built {
+            let a = self.slots[b.slot].arena;
+            for p in 0..STREAMS {
                 let len = b.len(p);
                 if len == 0 {
                     continue;
                 }
-                let start = match self.pools[p].alloc.alloc(len) {
+                let start = match self.arenas[a].pools[p].alloc.alloc(len) {
                     Some(s) => s,
                     None => {
-                        self.compact(gpu, p, &mut moved, stats);
-                        // `reserve` left at least `needed` units free, and compaction made
-                        // them one range.
-                        self.pools[p]
+                        self.compact(gpu, a, p, &mut moved, stats);
+                        // `reserve` left at least the batch's units free, and compaction
+                        // made them one range.
+                        self.arenas[a].pools[p]
                             .alloc
                             .alloc(len)
                             .expect("a compacted pool has its free units in one range")
@@ -456,15 +551,20 @@ impl ResidentGeometry {
             }
         }
         // Pools left fragmented: packed again (the merged draws follow patch order again).
-        for p in 0..STREAMS {
-            if fragmented(&self.pools[p].alloc) {
-                self.compact(gpu, p, &mut moved, stats);
+        for a in 0..self.arenas.len() {
+            for p in 0..STREAMS {
+                if fragmented(&self.arenas[a].pools[p].alloc) {
+                    self.compact(gpu, a, p, &mut moved, stats);
+                }
             }
         }
         stats.geometry_bytes += self.write(gpu, &built);
         let fresh: std::collections::HashSet<usize> = built.iter().map(|b| b.slot).collect();
+        drop(built);
         moved.retain(|i| !fresh.contains(i));
         self.reindex(renderer, moved, stats);
+        // Staged writes go to the GPU now, so their staging memory can be reused.
+        gpu.queue.submit([]);
         Ok(())
     }
 
@@ -472,15 +572,17 @@ impl ResidentGeometry {
     fn reindex(&mut self, renderer: &Renderer, mut moved: Vec<usize>, stats: &mut UploadStats) {
         moved.sort_unstable();
         moved.dedup();
-        let reindexed: Vec<Built> = moved
-            .par_iter()
-            .filter_map(|&i| {
-                let s = &self.slots[i];
-                let mesh = s.mesh.as_ref()?;
-                Some(Built::new(renderer, i, mesh, s.strips.clone(), true))
-            })
-            .collect();
-        stats.reindexed_bytes += self.write(&renderer.gpu, &reindexed);
+        for batch in moved.chunks(BATCH) {
+            let reindexed: Vec<Built> = batch
+                .par_iter()
+                .filter_map(|&i| {
+                    let s = &self.slots[i];
+                    let mesh = s.mesh.as_ref()?;
+                    Some(Built::new(renderer, i, mesh, s.strips.clone(), true))
+                })
+                .collect();
+            stats.reindexed_bytes += self.write(&renderer.gpu, &reindexed);
+        }
     }
 
     /// Packs every pool in patch order now (each slot's ranges adjacent to its neighbours',
@@ -489,8 +591,10 @@ impl ResidentGeometry {
     pub fn compact_all(&mut self, renderer: &Renderer) -> UploadStats {
         let mut stats = UploadStats::default();
         let mut moved = Vec::new();
-        for p in 0..STREAMS {
-            self.compact(&renderer.gpu, p, &mut moved, &mut stats);
+        for a in 0..self.arenas.len() {
+            for p in 0..STREAMS {
+                self.compact(&renderer.gpu, a, p, &mut moved, &mut stats);
+            }
         }
         self.reindex(renderer, moved, &mut stats);
         let drawn = std::mem::take(&mut self.drawn);
@@ -499,17 +603,25 @@ impl ResidentGeometry {
         stats
     }
 
-    /// Packs pool `p` in patch order; records the slots whose vertices moved in `moved`.
-    fn compact(&mut self, gpu: &Gpu, p: usize, moved: &mut Vec<usize>, stats: &mut UploadStats) {
-        let all: Vec<usize> = (0..self.slots.len()).collect();
-        self.compact_in(gpu, p, &all, moved, stats);
+    /// Packs pool `p` of arena `a` in patch order; records the slots whose vertices moved.
+    fn compact(
+        &mut self,
+        gpu: &Gpu,
+        a: usize,
+        p: usize,
+        moved: &mut Vec<usize>,
+        stats: &mut UploadStats,
+    ) {
+        self.compact_in(gpu, a, p, &[], moved, stats);
     }
 
-    /// Packs pool `p` with the ranges of the slots `first` in front, in that order (the
-    /// others after them by address); records the slots whose vertices moved in `moved`.
+    /// Packs pool `p` of arena `a` with the ranges of the slots `first` (those in the arena)
+    /// in front, in that order, the others after them by address; records the slots whose
+    /// vertices moved in `moved`.
     fn compact_in(
         &mut self,
         gpu: &Gpu,
+        a: usize,
         p: usize,
         first: &[usize],
         moved: &mut Vec<usize>,
@@ -517,18 +629,21 @@ impl ResidentGeometry {
     ) {
         let order: Vec<u64> = first
             .iter()
-            .filter_map(|&i| self.slots[i].ranges[p].map(|r| r.0))
+            .map(|&i| &self.slots[i])
+            .filter(|s| s.arena == a)
+            .filter_map(|s| s.ranges[p].map(|r| r.0))
             .collect();
-        let (moves, copied) = self.pools[p].compact(gpu, order);
+        let (moves, copied) = self.arenas[a].pools[p].compact(gpu, order);
         stats.copied_bytes += copied;
         stats.compactions += 1;
         let to: HashMap<u64, u64> = moves.iter().map(|m| (m.from, m.to)).collect();
         for (i, slot) in self.slots.iter_mut().enumerate() {
-            if let Some((start, len)) = slot.ranges[p]
+            if slot.arena == a
+                && let Some((start, len)) = slot.ranges[p]
                 && let Some(&new) = to.get(&start)
             {
                 slot.ranges[p] = Some((new, len));
-                if p == VERTICES || p == BORDER_VERTICES {
+                if p == VERTICES {
                     moved.push(i);
                 }
             }
@@ -539,126 +654,56 @@ impl ResidentGeometry {
     /// pool's contiguous ranges in one `write_buffer`. Returns the bytes written.
     fn write(&self, gpu: &Gpu, built: &[Built]) -> u64 {
         let mut written = 0;
-        for (p, pool) in self.pools.iter().enumerate() {
-            if (p == VERTICES || p == BORDER_VERTICES) && built.iter().all(|b| b.reindex) {
-                continue;
-            }
-            let mut items: Vec<(u64, &Built)> = built
-                .iter()
-                .filter(|b| !(b.reindex && (p == VERTICES || p == BORDER_VERTICES)))
-                .filter_map(|b| Some((self.slots[b.slot].ranges[p]?.0, b)))
-                .collect();
-            items.sort_unstable_by_key(|x| x.0);
-            let mut run: Option<u64> = None;
-            let mut bytes = Vec::new();
-            for (start, b) in items {
-                if run.is_some_and(|r| r + bytes.len() as u64 / pool.unit != start) {
-                    written += pool.write(gpu, run.unwrap_or(0), &bytes);
-                    bytes.clear();
-                    run = None;
+        let vertex_stream = |p: usize| p == VERTICES || p == POINTS;
+        for (a, arena) in self.arenas.iter().enumerate() {
+            for (p, pool) in arena.pools.iter().enumerate() {
+                let mut items: Vec<(u64, &Built)> = built
+                    .iter()
+                    .filter(|b| !(b.reindex && vertex_stream(p)))
+                    .filter(|b| self.slots[b.slot].arena == a)
+                    .filter_map(|b| Some((self.slots[b.slot].ranges[p]?.0, b)))
+                    .collect();
+                items.sort_unstable_by_key(|x| x.0);
+                let mut run: Option<u64> = None;
+                let mut bytes = Vec::new();
+                for (start, b) in items {
+                    if run.is_some_and(|r| r + bytes.len() as u64 / pool.unit != start) {
+                        written += pool.write(gpu, run.unwrap_or(0), &bytes);
+                        bytes.clear();
+                        run = None;
+                    }
+                    run.get_or_insert(start);
+                    b.append(p, &self.slots[b.slot], &mut bytes);
                 }
-                run.get_or_insert(start);
-                b.append(p, &self.slots[b.slot], &mut bytes);
-            }
-            if let Some(r) = run {
-                written += pool.write(gpu, r, &bytes);
+                if let Some(r) = run {
+                    written += pool.write(gpu, r, &bytes);
+                }
             }
         }
         written
     }
 
     /// The draw list of `drawn` (see the module doc), with its indirect arguments. When the
-    /// index streams split into more than [`PACK_DRAWS`] draws, their pools are packed with
-    /// the drawn patches in front, in order (a GPU-side copy; indices do not change), so each
-    /// stream is one draw again.
+    /// streams split into more than [`PACK_DRAWS`] draws, their pools are packed with the
+    /// drawn patches in front, in order (a GPU-side copy; indices do not change), so each
+    /// stream is one draw per arena again.
     fn rebuild_draws(&mut self, renderer: &Renderer, drawn: &[usize], stats: &mut UploadStats) {
-        let mut d = self.collect_draws(renderer, drawn, stats);
-        let split: usize = INDEX_STREAMS.iter().map(|&p| d.ranges[p].len()).sum();
-        if split > PACK_DRAWS {
+        let mut d = DrawList::collect(renderer, &self.slots, drawn, stats);
+        if d.split() > PACK_DRAWS {
             let mut moved = Vec::new();
-            for p in INDEX_STREAMS {
-                self.compact_in(&renderer.gpu, p, drawn, &mut moved, stats);
+            for a in 0..self.arenas.len() {
+                for p in DRAWN_STREAMS {
+                    self.compact_in(&renderer.gpu, a, p, drawn, &mut moved, stats);
+                }
             }
-            d = self.collect_draws(renderer, drawn, stats);
+            d = DrawList::collect(renderer, &self.slots, drawn, stats);
+        }
+        for a in &mut self.arenas {
+            a.rebind(renderer);
         }
         stats.rebuilt = true;
-        self.write_args(renderer, &mut d, stats);
+        d.write_args(renderer, &mut self.args, stats);
         self.draws = d;
-    }
-
-    /// The merged draws of `drawn`, no arguments yet.
-    fn collect_draws(
-        &self,
-        renderer: &Renderer,
-        drawn: &[usize],
-        stats: &mut UploadStats,
-    ) -> DrawList {
-        let mut d = DrawList::default();
-        for &i in drawn {
-            let slot = &self.slots[i];
-            for p in INDEX_STREAMS {
-                if let Some(r) = slot.ranges[p] {
-                    DrawList::push(&mut d.ranges[p], r);
-                }
-            }
-            if slot.is_static
-                && let Some(m) = &slot.mesh
-            {
-                stats.static_bytes += renderer
-                    .static_draws(m, &mut d.statics, &mut d.static_ranges)
-                    .1;
-            }
-        }
-        d
-    }
-
-    /// Writes the indirect arguments of `d` (on devices that draw indirect).
-    fn write_args(&mut self, renderer: &Renderer, d: &mut DrawList, stats: &mut UploadStats) {
-        if renderer.gpu.indirect {
-            let mut args: Vec<u8> = Vec::with_capacity(d.draw_count() * DRAW_ARGS_BYTES as usize);
-            let mut n = 0u32;
-            let mut put = |ranges: &[[u32; 2]], args: &mut Vec<u8>| {
-                let first = n;
-                for &[first_index, index_count] in ranges {
-                    args.extend_from_slice(
-                        wgpu::util::DrawIndexedIndirectArgs {
-                            index_count,
-                            instance_count: 1,
-                            first_index,
-                            base_vertex: 0,
-                            first_instance: 0,
-                        }
-                        .as_bytes(),
-                    );
-                }
-                n += ranges.len() as u32;
-                first
-            };
-            for p in INDEX_STREAMS {
-                d.first_arg[p] = put(&d.ranges[p], &mut args);
-            }
-            d.statics_first_arg = put(&d.static_ranges, &mut args);
-            if !args.is_empty() {
-                let gpu = &renderer.gpu;
-                if self
-                    .args
-                    .as_ref()
-                    .is_none_or(|b| b.size() < args.len() as u64)
-                {
-                    let size = (args.len() as u64 * 3 / 2).next_multiple_of(DRAW_ARGS_BYTES * 4);
-                    self.args = Some(gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                        label: Some("resident draw arguments"),
-                        size,
-                        usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
-                        mapped_at_creation: false,
-                    }));
-                }
-                if let Some(b) = &self.args {
-                    gpu.queue.write_buffer(b, 0, &args);
-                    stats.args_bytes = args.len() as u64;
-                }
-            }
-        }
     }
 
     /// Merged draws of the current draw list (all streams, static ranges included).
@@ -666,55 +711,29 @@ impl ResidentGeometry {
         self.draws.draw_count()
     }
 
+    /// Of which fat-border draws (of at most [`PATTERN_POINTS`] points; three indirect
+    /// arguments each, one per variant).
+    pub fn border_draw_count(&self) -> usize {
+        self.draws.ranges[POINTS].len()
+    }
+
     /// Records the draws of `variant` into `pass`.
     pub(super) fn encode(
         &self,
         pass: &mut wgpu::RenderPass<'_>,
         pipes: &Pipelines,
+        patterns: &[wgpu::Buffer; 3],
         variant: FatBorders,
         indirect: bool,
     ) {
-        let d = &self.draws;
-        let args = self.args.as_ref().filter(|_| indirect);
-        let draw = |pass: &mut wgpu::RenderPass<'_>, p: usize| match args {
-            Some(a) => pass.multi_draw_indexed_indirect(
-                a,
-                d.first_arg[p] as u64 * DRAW_ARGS_BYTES,
-                d.ranges[p].len() as u32,
-            ),
-            None => {
-                for &[first, count] in &d.ranges[p] {
-                    pass.draw_indexed(first..first + count, 0, 0..1);
-                }
-            }
-        };
-        for (p, pipeline) in [(LIST, &pipes.surface), (STRIPS, &pipes.surface_strip)] {
-            if !d.ranges[p].is_empty() {
-                pass.set_pipeline(pipeline);
-                pass.set_vertex_buffer(0, self.pools[VERTICES].buffer.slice(..));
-                pass.set_index_buffer(self.pools[p].buffer.slice(..), wgpu::IndexFormat::Uint32);
-                draw(pass, p);
-            }
-        }
-        encode_statics(
+        self.draws.encode(
             pass,
             pipes,
-            &d.statics,
-            args.map(|a| (a, d.statics_first_arg)),
-            &d.static_ranges,
+            patterns,
+            &self.arenas,
+            self.args.as_ref().filter(|_| indirect),
+            variant,
         );
-        let p = match variant {
-            FatBorders::Off => return,
-            FatBorders::Six => BORDER[0],
-            FatBorders::Four => BORDER[1],
-            FatBorders::Two => BORDER[2],
-        };
-        if !d.ranges[p].is_empty() {
-            pass.set_pipeline(&pipes.border);
-            pass.set_vertex_buffer(0, self.pools[BORDER_VERTICES].buffer.slice(..));
-            pass.set_index_buffer(self.pools[p].buffer.slice(..), wgpu::IndexFormat::Uint32);
-            draw(pass, p);
-        }
     }
 }
 

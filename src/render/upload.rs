@@ -1,4 +1,4 @@
-//! Upload: patch meshes into vertex, index and fat-border buffers; mesh-patch cuts drawn as
+//! Upload: patch meshes into vertex, index and fat-border point buffers; mesh-patch cuts drawn as
 //! ranges of per-patch static buffers (Holst's static arcs) with their strips (the one place
 //! the strip policy is decided: [`super::Primitives`]).
 
@@ -104,8 +104,8 @@ pub(super) fn encode_statics(
     }
 }
 
-/// Patch meshes uploaded to the GPU: one vertex/index buffer for all surfaces, one vertex
-/// buffer of displaced fat-border vertices with an index buffer per variant.
+/// Patch meshes uploaded to the GPU: one vertex/index buffer for all surfaces, the border
+/// points of the fat borders in buffers of at most one storage binding each.
 #[derive(Debug)]
 pub struct GpuMeshes {
     pub(super) vertices: wgpu::Buffer,
@@ -117,9 +117,9 @@ pub struct GpuMeshes {
     pub(super) strip_index_count: u32,
     /// Surface triangles uploaded in `indices` and `strip_indices`.
     pub(super) triangles: u32,
-    pub(super) border_vertices: wgpu::Buffer,
-    /// Index buffers for the 6-, 4- and 2-vertex variants, with their index counts.
-    pub(super) border_indices: [(wgpu::Buffer, u32); 3],
+    /// Border points ([`super::BorderPoint`]) split between rings into buffers of at most
+    /// [`Renderer::max_points_bytes`]: each buffer's bind group and point count.
+    pub(super) border_points: Vec<(wgpu::BindGroup, u32)>,
     pub(super) border_vertex_count: u32,
     /// Mesh patches drawn from their static buffers: the patch, its first draw in
     /// `indirect` (and `ranges`) and its number of draws.
@@ -191,6 +191,7 @@ impl GpuMeshes {
         &self,
         pass: &mut wgpu::RenderPass<'_>,
         pipes: &super::pipelines::Pipelines,
+        patterns: &[wgpu::Buffer; 3],
         variant: FatBorders,
     ) {
         for (pipeline, indices, count) in [
@@ -215,24 +216,36 @@ impl GpuMeshes {
             self.indirect.as_ref().map(|a| (a, 0)),
             &self.ranges,
         );
-        if let Some((indices, count)) = self.border_indices(variant)
-            && *count > 0
-        {
+        if variant != FatBorders::Off {
             pass.set_pipeline(&pipes.border);
-            pass.set_vertex_buffer(0, self.border_vertices.slice(..));
-            pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
-            pass.draw_indexed(0..*count, 0, 0..1);
+            for (bind, points) in &self.border_points {
+                pass.set_bind_group(1, bind, &[]);
+                draw_points(pass, patterns, variant, 0, *points);
+            }
         }
     }
+}
 
-    pub(super) fn border_indices(&self, variant: FatBorders) -> Option<&(wgpu::Buffer, u32)> {
-        match variant {
-            FatBorders::Off => None,
-            FatBorders::Six => Some(&self.border_indices[0]),
-            FatBorders::Four => Some(&self.border_indices[1]),
-            FatBorders::Two => Some(&self.border_indices[2]),
+/// Splits `points` between rings into runs of at most `max` points (a ring longer than that
+/// alone), so each run's rings have their neighbours in it.
+pub(super) fn ring_runs(points: &[BorderPoint], max: usize) -> Vec<std::ops::Range<usize>> {
+    let mut runs = Vec::new();
+    let (mut start, mut ring) = (0, 0);
+    for k in 0..=points.len() {
+        let opens = k == points.len() || points[k].info & fat_border::INFO_FIRST != 0;
+        if opens && k > ring {
+            // Ring [ring, k) read: cut before it when the run would pass `max`.
+            if k - start > max && ring > start {
+                runs.push(start..ring);
+                start = ring;
+            }
+            ring = k;
         }
     }
+    if points.len() > start {
+        runs.push(start..points.len());
+    }
+    runs
 }
 
 impl Renderer {
@@ -316,20 +329,22 @@ impl Renderer {
             ),
             strip_index_count: strip_indices.len() as u32,
             triangles,
-            border_vertices: init(
-                "fat border vertices",
-                bytemuck::cast_slice(&borders.vertices),
-                wgpu::BufferUsages::VERTEX,
-            ),
-            border_indices: borders.indices.each_ref().map(|idx| {
-                let buf = init(
-                    "fat border indices",
-                    bytemuck::cast_slice(idx),
-                    wgpu::BufferUsages::INDEX,
-                );
-                (buf, idx.len() as u32)
-            }),
-            border_vertex_count: (borders.vertices.len() / fat_border::SLOTS) as u32,
+            border_points: {
+                let max = (self.max_points_bytes() / size_of::<BorderPoint>() as u64) as usize;
+                ring_runs(&borders.points, max)
+                    .into_iter()
+                    .map(|run| {
+                        let points = &borders.points[run];
+                        let buf = init(
+                            "fat border points",
+                            bytemuck::cast_slice(points),
+                            wgpu::BufferUsages::STORAGE,
+                        );
+                        (self.points_bind_group(&buf), points.len() as u32)
+                    })
+                    .collect()
+            },
+            border_vertex_count: meshes.iter().map(|m| m.border_vertex_count() as u32).sum(),
             indirect: (self.gpu.indirect && !ranges.is_empty()).then(|| {
                 let args: Vec<u8> = ranges
                     .iter()

@@ -1,6 +1,7 @@
 //! One GPU buffer suballocated by an [`Allocator`]: growth by reallocation with a GPU-side
-//! copy (`copy_buffer_to_buffer`, ranges keep their addresses), compaction into a new buffer
-//! (ranges move; the caller fixes what refers to them).
+//! copy (`copy_buffer_to_buffer`, ranges keep their addresses) up to a largest size (the
+//! device's largest buffer or binding; past it the caller opens another arena), compaction
+//! into a new buffer (ranges move; the caller fixes what refers to them).
 
 use super::alloc::{Allocator, Move};
 use crate::render::{Gpu, RenderError};
@@ -11,10 +12,12 @@ const MIN_CAPACITY: u64 = 1024;
 /// A GPU buffer of `unit`-byte elements and the allocator of its ranges.
 #[derive(Debug)]
 pub(crate) struct Pool {
-    label: &'static str,
+    pub(crate) label: &'static str,
     usage: wgpu::BufferUsages,
     /// Bytes per unit (a multiple of 4, `COPY_BUFFER_ALIGNMENT`).
     pub(crate) unit: u64,
+    /// Units the pool may grow to.
+    pub(crate) max_units: u64,
     pub(crate) buffer: wgpu::Buffer,
     pub(crate) alloc: Allocator,
 }
@@ -25,34 +28,42 @@ impl Pool {
         label: &'static str,
         usage: wgpu::BufferUsages,
         unit: u64,
+        max_bytes: u64,
     ) -> Pool {
         debug_assert!(unit.is_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT));
         let usage = usage | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC;
+        let max_units = (max_bytes / unit).max(1);
+        let first = MIN_CAPACITY.min(max_units);
         Pool {
             label,
             usage,
             unit,
-            buffer: buffer(gpu, label, usage, unit * MIN_CAPACITY),
-            alloc: Allocator::new(MIN_CAPACITY),
+            max_units,
+            buffer: buffer(gpu, label, usage, unit * first),
+            alloc: Allocator::new(first),
         }
     }
 
+    /// Whether `needed` more units fit under [`Pool::max_units`].
+    pub(crate) fn fits(&self, needed: u64) -> bool {
+        self.alloc.used() + needed <= self.max_units
+    }
+
     /// Makes room for `needed` more units in all (not necessarily in one range): grows to
-    /// at least 1.5× when the free units fall short, never past the device's largest buffer
+    /// at least 1.5× when the free units fall short, never past [`Pool::max_units`]
     /// ([`RenderError::TooLarge`] when even that is too small). Returns the bytes copied on
     /// the GPU.
     pub(crate) fn reserve(&mut self, gpu: &Gpu, needed: u64) -> Result<u64, RenderError> {
         if self.alloc.free() >= needed {
             return Ok(0);
         }
-        let limit = gpu.device.limits().max_buffer_size;
-        let max_units = limit / self.unit;
+        let max_units = self.max_units;
         let used = self.alloc.used() + needed;
         if used > max_units {
             return Err(RenderError::TooLarge {
                 what: self.label,
                 bytes: used.saturating_mul(self.unit),
-                limit,
+                limit: max_units * self.unit,
             });
         }
         let want = (used * 9 / 8).min(max_units);
@@ -123,6 +134,11 @@ impl Pool {
         gpu.queue.submit([encoder.finish()]);
         self.buffer = new;
         (moves, copied)
+    }
+
+    /// Bytes of the buffer.
+    pub(crate) fn bytes(&self) -> u64 {
+        self.alloc.capacity() * self.unit
     }
 
     /// Writes `bytes` at unit `start`; returns the bytes written.
