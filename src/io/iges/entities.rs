@@ -108,6 +108,9 @@ impl Params {
 pub struct Decoder<'f, 'a> {
     pub file: &'f IgesFile<'a>,
     stack: Vec<usize>,
+    /// Boundaries given by both curves whose parameter-space curve strays from the
+    /// model-space one (the model-space curve is used), and how many gave both.
+    pub disagreeing: (usize, usize),
 }
 
 impl<'f, 'a> Decoder<'f, 'a> {
@@ -115,6 +118,7 @@ impl<'f, 'a> Decoder<'f, 'a> {
         Decoder {
             file,
             stack: Vec::new(),
+            disagreeing: (0, 0),
         }
     }
 

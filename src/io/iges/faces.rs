@@ -172,6 +172,13 @@ pub fn collect(file: &IgesFile<'_>) -> Collected {
             out.shells.push((def as u64, transform, name));
         }
     }
+    if d.disagreeing.0 > 0 {
+        out.warnings.push(format!(
+            "{} of {} boundaries (142) drawn by their model-space curve: their parameter-space \
+             curve strays from it by more than {AGREEMENT} of the loop's size",
+            d.disagreeing.0, d.disagreeing.1
+        ));
+    }
     out
 }
 
@@ -352,9 +359,11 @@ fn trim_loop(
         };
         let edges = match (lifted, model_edges) {
             (Some(l), Some(m)) => {
+                d.disagreeing.1 += 1;
                 if agrees(&l, &m) {
                     l
                 } else {
+                    d.disagreeing.0 += 1;
                     m
                 }
             }
