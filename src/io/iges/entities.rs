@@ -167,18 +167,23 @@ impl<'f, 'a> Decoder<'f, 'a> {
         if e.transform == 0 {
             return Ok(DMat4::IDENTITY);
         }
-        self.visit(e.transform, e.de, "transformation matrix (field 7)", |d, m| {
-            expect_type(m, &[124])?;
-            let p = d.params(m)?;
-            let r = p.reals(1, 12, "matrix element")?;
-            let own = DMat4::from_cols(
-                DVec4::new(r[0], r[4], r[8], 0.0),
-                DVec4::new(r[1], r[5], r[9], 0.0),
-                DVec4::new(r[2], r[6], r[10], 0.0),
-                DVec4::new(r[3], r[7], r[11], 1.0),
-            );
-            Ok(d.placement(m)? * own)
-        })
+        self.visit(
+            e.transform,
+            e.de,
+            "transformation matrix (field 7)",
+            |d, m| {
+                expect_type(m, &[124])?;
+                let p = d.params(m)?;
+                let r = p.reals(1, 12, "matrix element")?;
+                let own = DMat4::from_cols(
+                    DVec4::new(r[0], r[4], r[8], 0.0),
+                    DVec4::new(r[1], r[5], r[9], 0.0),
+                    DVec4::new(r[2], r[6], r[10], 0.0),
+                    DVec4::new(r[3], r[7], r[11], 1.0),
+                );
+                Ok(d.placement(m)? * own)
+            },
+        )
     }
 
     /// The curve DE `de` (pointed to by `from`) as B-spline segments with the DE each came

@@ -132,7 +132,8 @@ pub fn collect(file: &IgesFile<'_>) -> Collected {
         let (def, transform, name) = match placed {
             Ok(x) => x,
             Err(e) => {
-                out.warnings.push(format!("subfigure instance skipped: {e}"));
+                out.warnings
+                    .push(format!("subfigure instance skipped: {e}"));
                 continue;
             }
         };
@@ -223,20 +224,18 @@ fn instance(
 pub fn face(d: &mut Decoder<'_, '_>, e: &Entry) -> Result<TrimmedFace, IgesError> {
     let (surface, range, loops) = if e.entity_type == 128 {
         let patch = d.surface(e.de as i64, e.de)?;
-        let surface = patch.surface().map_err(|reason| IgesError::Invalid {
-            de: e.de,
-            reason,
-        })?;
+        let surface = patch
+            .surface()
+            .map_err(|reason| IgesError::Invalid { de: e.de, reason })?;
         (surface, patch.range, Vec::new())
     } else {
         d.visit(e.de as i64, e.de, "trimmed surface", |d, e| {
             let p = d.params(e)?;
             let m = d.placement(e)?;
             let patch = d.surface(p.int(1, "surface PTS")?, e.de)?.transformed(&m);
-            let surface = patch.surface().map_err(|reason| IgesError::Invalid {
-                de: e.de,
-                reason,
-            })?;
+            let surface = patch
+                .surface()
+                .map_err(|reason| IgesError::Invalid { de: e.de, reason })?;
             let n1 = p.int(2, "N1")?;
             let n2 = p.count(3, "number of inner boundaries N2", p.p.len())?;
             let mut loops = Vec::new();
@@ -292,7 +291,10 @@ pub fn face(d: &mut Decoder<'_, '_>, e: &Entry) -> Result<TrimmedFace, IgesError
 fn rectangle(
     surface: &Surface,
     (u0, u1, v0, v1): (f64, f64, f64, f64),
-    closed: (crate::model::trimmed::Interval, crate::model::trimmed::Interval),
+    closed: (
+        crate::model::trimmed::Interval,
+        crate::model::trimmed::Interval,
+    ),
 ) -> Vec<TrimEdge> {
     let corners = [(u0, v0), (u1, v0), (u1, v1), (u0, v1)];
     (0..4)
@@ -507,4 +509,3 @@ fn chain(edges: Vec<TrimEdge>, de: usize) -> Result<Vec<LoopEdge>, IgesError> {
         })
         .collect())
 }
-

@@ -200,7 +200,10 @@ pub fn split(bytes: &[u8]) -> Result<Sections<'_>, IgesError> {
             reason: "the directory section has an odd number of lines (entries are pairs)".into(),
         });
     }
-    let gtext: Vec<u8> = g.iter().flat_map(|(l, _)| l[..72].iter().copied()).collect();
+    let gtext: Vec<u8> = g
+        .iter()
+        .flat_map(|(l, _)| l[..72].iter().copied())
+        .collect();
     let global = parse_global(&gtext).map_err(|reason| IgesError::Section {
         line: g.first().map_or(tline, |x| x.1),
         reason: format!("global section: {reason}"),
@@ -233,7 +236,9 @@ fn parse_global(text: &[u8]) -> Result<Global, String> {
     skip_blanks(&mut pos);
     // Parameter delimiter.
     let param_delim = if text[pos..].starts_with(b"1H") {
-        let c = *text.get(pos + 2).ok_or("ends inside the parameter delimiter")?;
+        let c = *text
+            .get(pos + 2)
+            .ok_or("ends inside the parameter delimiter")?;
         pos += 3;
         skip_blanks(&mut pos);
         if text.get(pos) != Some(&c) {
@@ -249,7 +254,9 @@ fn parse_global(text: &[u8]) -> Result<Global, String> {
     };
     skip_blanks(&mut pos);
     let record_delim = if text[pos..].starts_with(b"1H") {
-        let c = *text.get(pos + 2).ok_or("ends inside the record delimiter")?;
+        let c = *text
+            .get(pos + 2)
+            .ok_or("ends inside the record delimiter")?;
         pos += 3;
         skip_blanks(&mut pos);
         match text.get(pos) {
@@ -292,7 +299,10 @@ pub fn parse_free(text: &[u8], pd: u8, rd: u8) -> Result<(Vec<Param>, usize), St
         }
         let start = pos;
         // A Hollerith string: digits, `H`, that many characters.
-        let digits = text[pos..].iter().take_while(|b| b.is_ascii_digit()).count();
+        let digits = text[pos..]
+            .iter()
+            .take_while(|b| b.is_ascii_digit())
+            .count();
         let param = if digits > 0 && matches!(text.get(pos + digits), Some(b'H' | b'h')) {
             let n: usize = std::str::from_utf8(&text[pos..pos + digits])
                 .ok()
