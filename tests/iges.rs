@@ -139,6 +139,31 @@ fn non_default_delimiters_and_hollerith_strings() {
 }
 
 #[test]
+fn planes_are_trimmed_by_their_model_space_curves() {
+    for file in ["plane_108.igs", "plane_190.igs"] {
+        let scene = load(file).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(
+            patchwork::check::fidelity::surface_kind(&face(&scene, 0).surface),
+            "plane",
+            "{file}"
+        );
+        let a = area(&scene);
+        assert!(
+            (a - SQUARE_WITH_HOLE).abs() < 0.01 * SQUARE_WITH_HOLE,
+            "{file}: area {a}"
+        );
+        assert!(
+            scene
+                .warnings
+                .iter()
+                .any(|w| w.contains("2 of 2 boundaries")),
+            "{file}: {:?}",
+            scene.warnings
+        );
+    }
+}
+
+#[test]
 fn untrimmed_surfaces_are_whole_patches() {
     let scene = load("untrimmed.igs").expect("loads");
     assert_eq!(scene.patches.len(), 1);

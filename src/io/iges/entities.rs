@@ -12,7 +12,7 @@ use glam::{DMat4, DVec3, DVec4};
 
 use super::IgesError;
 use super::directory::{Entry, IgesFile};
-use super::nurbs::{Nurbs, NurbsPatch, check_bspline};
+use super::nurbs::{Nurbs, NurbsPatch, SurfaceDef, check_bspline};
 use super::sections::Param;
 
 /// Most references followed from one entity (composite curves in composite curves, matrices
@@ -227,12 +227,48 @@ impl<'f, 'a> Decoder<'f, 'a> {
     }
 
     /// The surface DE `de` (pointed to by `from`), in the pointing entity's coordinates.
-    pub fn surface(&mut self, de: i64, from: usize) -> Result<NurbsPatch, IgesError> {
+    pub fn surface(&mut self, de: i64, from: usize) -> Result<SurfaceDef, IgesError> {
         self.visit(de, from, "surface", |d, e| {
-            expect_type(e, &[128])?;
+            expect_type(e, &[128, 108, 190])?;
             let p = d.params(e)?;
-            let s = bspline_surface(&p)?;
+            let s = match e.entity_type {
+                128 => SurfaceDef::Nurbs(bspline_surface(&p)?),
+                108 => {
+                    // A x + B y + C z = D.
+                    let n = p.point(1, "plane coefficient")?;
+                    let dist = p.real(4, "plane coefficient D")?;
+                    plane(e.de, n * dist / n.length_squared(), n, None)?
+                }
+                _ => {
+                    // 190: a point (116), the normal and, for form 1, a reference direction (123).
+                    let at = d.point(p.int(1, "location DELOC")?, e.de)?;
+                    let n = d.direction(p.int(2, "normal DENRML")?, e.de)?;
+                    let r = match p.int(3, "reference direction DEREFD").unwrap_or(0) {
+                        0 => None,
+                        r => Some(d.direction(r, e.de)?),
+                    };
+                    plane(e.de, at, n, r)?
+                }
+            };
             Ok(s.transformed(&d.placement(e)?))
+        })
+    }
+
+    /// A point (116), in the pointing entity's coordinates.
+    fn point(&mut self, de: i64, from: usize) -> Result<DVec3, IgesError> {
+        self.visit(de, from, "point", |d, e| {
+            expect_type(e, &[116])?;
+            let q = d.params(e)?.point(1, "point")?;
+            Ok(d.placement(e)?.transform_point3(q))
+        })
+    }
+
+    /// A direction (123), in the pointing entity's coordinates.
+    fn direction(&mut self, de: i64, from: usize) -> Result<DVec3, IgesError> {
+        self.visit(de, from, "direction", |d, e| {
+            expect_type(e, &[123])?;
+            let v = d.params(e)?.point(1, "direction")?;
+            Ok(d.placement(e)?.transform_vector3(v))
         })
     }
 
@@ -394,5 +430,41 @@ fn bspline_surface(p: &Params) -> Result<NurbsPatch, IgesError> {
         points,
         weights: rational.then_some(weights),
         range,
+    })
+}
+
+/// A plane through `origin` with normal `n`, its x axis `reference` made orthogonal to `n` (or
+/// the coordinate axis least along `n`), y = n × x.
+fn plane(
+    de: usize,
+    origin: DVec3,
+    n: DVec3,
+    reference: Option<DVec3>,
+) -> Result<SurfaceDef, IgesError> {
+    let bad = |what: &str| IgesError::Invalid {
+        de,
+        reason: format!("the plane's {what} is zero or not finite"),
+    };
+    let n = n.try_normalize().ok_or_else(|| bad("normal"))?;
+    if !origin.is_finite() {
+        return Err(bad("location"));
+    }
+    let guess = reference.unwrap_or_else(|| {
+        let a = n.abs();
+        if a.x <= a.y && a.x <= a.z {
+            DVec3::X
+        } else if a.y <= a.z {
+            DVec3::Y
+        } else {
+            DVec3::Z
+        }
+    });
+    let x = (guess - n * guess.dot(n))
+        .try_normalize()
+        .ok_or_else(|| bad("reference direction"))?;
+    Ok(SurfaceDef::Plane {
+        origin,
+        x,
+        y: n.cross(x),
     })
 }

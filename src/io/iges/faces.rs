@@ -227,7 +227,7 @@ pub fn face(d: &mut Decoder<'_, '_>, e: &Entry) -> Result<TrimmedFace, IgesError
         let surface = patch
             .surface()
             .map_err(|reason| IgesError::Invalid { de: e.de, reason })?;
-        (surface, patch.range, Vec::new())
+        (surface, patch.range(), Vec::new())
     } else {
         d.visit(e.de as i64, e.de, "trimmed surface", |d, e| {
             let p = d.params(e)?;
@@ -247,7 +247,7 @@ pub fn face(d: &mut Decoder<'_, '_>, e: &Entry) -> Result<TrimmedFace, IgesError
                 let b = p.int(5 + i, "inner boundary PTI")?;
                 loops.push((trim_loop(d, b, e.de, &surface, &m)?, false));
             }
-            Ok((surface, patch.range, loops))
+            Ok((surface, patch.range(), loops))
         })?
     };
     let closed =
@@ -255,6 +255,10 @@ pub fn face(d: &mut Decoder<'_, '_>, e: &Entry) -> Result<TrimmedFace, IgesError
     let mut loops = loops;
     if loops.is_empty() || !loops.iter().any(|l| l.1) {
         // No outer boundary: the whole parameter rectangle.
+        let range = range.ok_or_else(|| IgesError::Invalid {
+            de: e.de,
+            reason: "an unbounded plane without an outer boundary".into(),
+        })?;
         let rect = rectangle(&surface, range, closed);
         loops.insert(0, (chain(rect, e.de)?, true));
     }

@@ -13,8 +13,8 @@
 //! Faces whose entities are bad (a pointer to no entity, a reference cycle, a missing
 //! parameter, an unsupported surface) are skipped with their DE and reason; when none can be
 //! used, the first face's [`IgesError`] is the error. Entities drawn by no face are counted
-//! per type in one warning. Not read: analytic surfaces (108, 190–198), the compressed and
-//! binary forms.
+//! per type in one warning. Planes (108, 190) are read as surfaces of 144s; not read: the other
+//! analytic surfaces (192–198), a bounded 108 on its own, the compressed and binary forms.
 
 pub mod directory;
 pub mod entities;
@@ -97,7 +97,9 @@ impl IgesError {
 }
 
 /// Entity types the reader uses (others are counted in a warning).
-const USED_TYPES: &[i64] = &[0, 100, 102, 110, 124, 126, 128, 142, 144, 308, 314, 408];
+const USED_TYPES: &[i64] = &[
+    0, 100, 102, 108, 110, 116, 123, 124, 126, 128, 142, 144, 190, 308, 314, 408,
+];
 
 /// Reads an IGES file from bytes (`path` is for messages).
 pub fn read(bytes: &[u8], path: &Path) -> Result<StepModel, LoadError> {

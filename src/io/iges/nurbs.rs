@@ -9,7 +9,7 @@ use truck_stepio::r#in::alias::re_exports::{
     BSplineCurve, BSplineSurface, KnotVec, NurbsCurve, NurbsSurface, Point2, Point3, Vector3,
     Vector4,
 };
-use truck_stepio::r#in::alias::{Curve2D, Curve3D, Surface};
+use truck_stepio::r#in::alias::{Curve2D, Curve3D, ElementarySurface, Surface};
 
 /// A B-spline curve (rational when `weights` is given), used on `[t0, t1]`.
 #[derive(Clone, Debug)]
@@ -203,5 +203,51 @@ impl NurbsPatch {
                 .map_err(|e| e.to_string())?,
             ))),
         })
+    }
+}
+
+/// A surface entity: a B-spline patch, or a plane (108, 190) parametrised by arc length along
+/// two orthonormal axes from `origin` (no finite parameter range).
+#[derive(Clone, Debug)]
+pub enum SurfaceDef {
+    Nurbs(NurbsPatch),
+    Plane { origin: DVec3, x: DVec3, y: DVec3 },
+}
+
+impl SurfaceDef {
+    pub fn transformed(self, m: &DMat4) -> SurfaceDef {
+        match self {
+            SurfaceDef::Nurbs(n) => SurfaceDef::Nurbs(n.transformed(m)),
+            SurfaceDef::Plane { origin, x, y } => SurfaceDef::Plane {
+                origin: m.transform_point3(origin),
+                x: m.transform_vector3(x),
+                y: m.transform_vector3(y),
+            },
+        }
+    }
+
+    pub fn surface(&self) -> Result<Surface, String> {
+        match self {
+            SurfaceDef::Nurbs(n) => n.surface(),
+            SurfaceDef::Plane { origin: o, x, y } => {
+                let p = |v: DVec3| Point3::new(v.x, v.y, v.z);
+                let plane = truck_stepio::r#in::alias::re_exports::Plane::new(
+                    p(*o),
+                    p(*o + *x),
+                    p(*o + *y),
+                );
+                Ok(Surface::ElementarySurface(Box::new(
+                    ElementarySurface::Plane(plane),
+                )))
+            }
+        }
+    }
+
+    /// The parameter rectangle a whole patch covers; `None` for an unbounded plane.
+    pub fn range(&self) -> Option<(f64, f64, f64, f64)> {
+        match self {
+            SurfaceDef::Nurbs(n) => Some(n.range),
+            SurfaceDef::Plane { .. } => None,
+        }
     }
 }

@@ -147,6 +147,16 @@ def main():
         {"type": 408, "params": [49, 0, 20, 0, 2]},
     ]
     write("subfigures.igs", sub)
+    # The square on planes: a 108 (z = 0) and a 190 (point 116, normal and reference 123). Their
+    # parameter spaces are not the 128's unit square: the model-space curves trim them.
+    p108 = base()
+    p108[1] = {"type": 108, "params": [0, 0, 1, 0, 0, 0, 0, 0, 0], "status": "00010000"}
+    write("plane_108.igs", p108)
+    p190 = base(extra=[{"type": 116, "params": [0, 0, 0], "status": "00010000"},
+                       {"type": 123, "params": [0, 0, 1], "status": "00010000"},
+                       {"type": 123, "params": [1, 0, 0], "status": "00010000"}])
+    p190[1] = {"type": 190, "params": [49, 51, 53], "form": 1, "status": "00010000"}
+    write("plane_190.igs", p190)
 
 
 if __name__ == "__main__":
