@@ -154,6 +154,12 @@ impl<'f, 'a> Decoder<'f, 'a> {
         r
     }
 
+    /// Forgets the DEs being decoded (after a decoding that panicked, see
+    /// [`crate::isolate::isolated`]).
+    pub fn reset(&mut self) {
+        self.stack.clear();
+    }
+
     pub fn params(&self, e: &Entry) -> Result<Params, IgesError> {
         Ok(Params {
             de: e.de,

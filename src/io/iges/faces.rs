@@ -93,7 +93,14 @@ pub fn collect(file: &IgesFile<'_>) -> Collected {
         if !converted.insert(e.de) {
             return;
         }
-        let r = face(d, e);
+        // truck code evaluates the curves and surfaces: a panic there skips the face.
+        let r = isolated(|| face(d, e)).unwrap_or_else(|reason| {
+            d.reset();
+            Err(IgesError::Invalid {
+                de: e.de,
+                reason: format!("the geometry library {reason}"),
+            })
+        });
         if let Err(err) = &r
             && out.first_error.is_none()
         {
