@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """Independent fidelity judge: patchwork's export against Open CASCADE.
 
-For every STEP file of the corpus (default: models/*.stp, models/*.step and
-models/corpus/*.{stp,step}[.gz]) and every relative tolerance `rel`:
+For every STEP or IGES file of the corpus (default: models/*.{stp,step,igs,iges} and
+models/corpus/*.{stp,step,igs,iges}[.gz]) and every relative tolerance `rel`:
 
   T = rel x diagonal of OCCT's world bounding box (millimetres).
 
@@ -48,6 +48,9 @@ OCCT face (index in its part, surface type from BRepAdaptor_Surface.GetType with
 parameters: cone half-angle, radii, B-spline degrees and periodicity, parameter
 ranges) and the world point. (OCCT's STEP transfer does not record which
 ADVANCED_FACE became which face, so no #id is given.)
+
+IGES files (.igs/.iges[.gz]) are read by OCCT's IGESControl_Reader and sewn with
+BRepBuilderAPI_Sewing (class OcctIges): one part, one instance; compared exactly as above.
 
 Exit status 1 on any failure not listed in --known-failures (lines `file: reason`;
 listed files that fail print KNOWN, listed files that pass print FIXED (remove
@@ -497,6 +500,40 @@ class Occt:
         return "%s face %d %s%s" % (p["name"], fid, typ, ent)
 
 
+class OcctIges(Occt):
+    """One IGES file read as OCCT users do: IGESControl_Reader (lengths in mm), every root
+    transferred into one shape, the faces sewn with BRepBuilderAPI_Sewing (its default
+    tolerance). IGES keeps no assembly structure that the reader passes on: the sewn shape is
+    one part with one instance, as patchwork exports an IGES file's faces as one mesh."""
+
+    def __init__(self, path):
+        from OCP.BRepBuilderAPI import BRepBuilderAPI_Sewing
+        from OCP.IFSelect import IFSelect_RetDone
+        from OCP.IGESControl import IGESControl_Reader
+        from OCP.Interface import Interface_Static
+
+        Interface_Static.SetCVal_s("xstep.cascade.unit", "MM")
+        reader = IGESControl_Reader()
+        if reader.ReadFile(path) != IFSelect_RetDone:
+            raise RuntimeError("OCCT could not read " + path)
+        if reader.TransferRoots() == 0:
+            raise RuntimeError("OCCT transferred nothing from " + path)
+        sewing = BRepBuilderAPI_Sewing()
+        sewing.Add(reader.OneShape())
+        sewing.Perform()
+        shape = sewing.SewedShape()
+        name = os.path.basename(path)
+        self.protos = [{"name": name, "shape": shape, "subs": [shape]}]
+        self.proto_of = {name: 0}
+        self.instances = [{"proto": 0, "sub": 0, "M": np.eye(4), "name": name}]
+        self.placements = 1
+
+
+def is_iges(path):
+    p = path.lower()
+    return p.endswith((".igs", ".iges", ".igs.gz", ".iges.gz"))
+
+
 def _face_points(face, spacing, cap=200000):
     """Points on a face (its surface inside its boundary) about `spacing` apart."""
     from OCP.BRepAdaptor import BRepAdaptor_Surface
@@ -786,6 +823,12 @@ def evaluate(occt, ours, rel, T, diag, occt_fine, rng, max_samples, per_tri):
         bad = chk[ex > 0.5 * T]
         res["b_occt_artefacts"] = int(len(bad))
         db[bad] = 0.0
+        # a sample off OCCT's B-rep by δ > T/10 (BRepMesh missed its deflection there) may lie
+        # T + δ from ours without a fault of ours: judge it by that bound
+        loose = chk[(ex > 0.1 * T) & (ex <= 0.5 * T)]
+        lex = ex[(ex > 0.1 * T) & (ex <= 0.5 * T)]
+        res["b_occt_loose"] = int(len(loose))
+        db[loose] = np.where(db[loose] <= T + lex, np.minimum(db[loose], BOUND * T), db[loose])
         res["b_exceed"] = int((db > BOUND * T).sum())
         k = int(np.argmax(db))
         res["b_over_T"] = float(db[k] / T)
@@ -819,7 +862,7 @@ def run_file(path, rels, pw, max_samples, workdir, seed):
         with gzip.open(path, "rb") as fi, open(plain, "wb") as fo:
             shutil.copyfileobj(fi, fo)
     try:
-        occt = Occt(plain)
+        occt = OcctIges(plain) if is_iges(path) else Occt(plain)
     except Exception as e:  # noqa: BLE001
         return [{"file": path, "rel": r, "fail": ["OCCT: %s" % e], "time": time.time() - t0} for r in rels]
     lo, hi = occt.bbox()
@@ -902,7 +945,9 @@ def load_known(path):
 def default_files():
     fs = []
     for pat in ("models/*.stp", "models/*.step", "models/corpus/*.stp", "models/corpus/*.step",
-                "models/corpus/*.stp.gz", "models/corpus/*.step.gz"):
+                "models/corpus/*.stp.gz", "models/corpus/*.step.gz", "models/*.igs", "models/*.iges",
+                "models/corpus/*.igs", "models/corpus/*.iges", "models/corpus/*.igs.gz",
+                "models/corpus/*.iges.gz"):
         fs += glob.glob(os.path.join(REPO, pat))
     return sorted(fs, key=lambda p: os.path.getsize(p))
 
@@ -997,7 +1042,7 @@ def self_test(args):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("files", nargs="*", help="STEP files (.stp/.step, optionally .gz); default: the corpus")
+    ap.add_argument("files", nargs="*", help="STEP (.stp/.step) or IGES (.igs/.iges) files, optionally .gz; default: the corpus")
     ap.add_argument("--rel", default="3e-3", help="relative tolerance(s), comma-separated (T = rel x bbox diagonal)")
     ap.add_argument("--patchwork", default=os.environ.get("PATCHWORK", os.path.join(REPO, "target", "release", "patchwork")))
     ap.add_argument("--json", help="write the table as JSON here")

@@ -8,6 +8,7 @@
 //! | `.bpt`    | [`bpt::read`] | z       |
 //! | `.step`, `.stp` | [`step::parse`] | z (CAD convention) |
 //! | `.step.gz`, `.stp.gz` | gzip, then [`step::parse`] | z |
+//! | `.iges`, `.igs` (also `.gz`) | [`iges::read`] | z |
 //!
 //! Every reader reports failures as a [`LoadError`] that names the file and, where the problem
 //! is at a place in the file, the 1-based line, so that its message reads like
@@ -17,6 +18,7 @@
 pub mod bpt;
 pub mod depth;
 pub mod gltf_out;
+pub mod iges;
 pub mod mesh;
 pub mod mt_cache;
 pub mod png;
@@ -86,9 +88,17 @@ pub enum LoadError {
     #[error("{}: {reason}", .path.display())]
     Unreadable { path: PathBuf, reason: String },
 
+    /// An IGES file that breaks the format (line, or entity by its DE number: see
+    /// [`iges::IgesError`]).
+    #[error("{}: {source}", .path.display())]
+    Iges {
+        path: PathBuf,
+        source: iges::IgesError,
+    },
+
     /// No reader for this file extension (`extension` is empty when there is none).
     #[error(
-        "{}: unsupported model format {extension:?} (patchwork reads .bpt, .step, .stp, .step.gz, .stp.gz, .glb, .gltf, .obj, .ply and .stl files)",
+        "{}: unsupported model format {extension:?} (patchwork reads .bpt, .step, .stp, .step.gz, .stp.gz, .iges, .igs, .iges.gz, .igs.gz, .glb, .gltf, .obj, .ply and .stl files)",
         .path.display()
     )]
     UnsupportedFormat { path: PathBuf, extension: String },
@@ -112,6 +122,7 @@ impl LoadError {
             | LoadError::NoPatches { path }
             | LoadError::NoFaces { path, .. }
             | LoadError::Unreadable { path, .. }
+            | LoadError::Iges { path, .. }
             | LoadError::Patch { path, .. }
             | LoadError::UnsupportedFormat { path, .. }
             | LoadError::NotBuiltIn { path, .. } => path,
@@ -122,6 +133,10 @@ impl LoadError {
     pub fn line(&self) -> Option<usize> {
         match self {
             LoadError::Parse { line, .. } | LoadError::Patch { line, .. } => Some(*line),
+            LoadError::Iges {
+                source: iges::IgesError::Section { line, .. },
+                ..
+            } => Some(*line),
             _ => None,
         }
     }
@@ -135,7 +150,7 @@ pub const MAX_GUNZIPPED_BYTES: u64 = 4 << 30;
 fn read_gzip(path: &Path) -> Result<Vec<u8>, LoadError> {
     Err(LoadError::NotBuiltIn {
         path: path.to_path_buf(),
-        format: "gzipped STEP",
+        format: "gzipped STEP or IGES",
         feature: "gzip",
     })
 }
@@ -165,6 +180,10 @@ fn read_gzip(path: &Path) -> Result<Vec<u8>, LoadError> {
     Ok(bytes)
 }
 
+fn is_iges(extension: &str) -> bool {
+    extension.eq_ignore_ascii_case("iges") || extension.eq_ignore_ascii_case("igs")
+}
+
 /// What a model file holds, before load-time preparation ([`crate::prep`]).
 #[derive(Debug)]
 pub enum Model {
@@ -172,7 +191,8 @@ pub enum Model {
     Bezier(Vec<crate::model::BezierPatch>),
     /// A triangle mesh in world coordinates (`.glb`, `.gltf`, `.obj`, `.ply`, y-up).
     Mesh(mesh::TriMesh),
-    /// A STEP file's faces and product structure (`.step`, `.stp`, also gzipped).
+    /// A STEP file's faces and product structure (`.step`, `.stp`, also gzipped); an IGES
+    /// file's faces (`.iges`, `.igs`, also gzipped) in the same form.
     Step(Box<step::StepModel>),
 }
 
@@ -207,6 +227,10 @@ pub fn read_with(path: &Path, progress: &dyn crate::util::Progress) -> Result<Mo
                 &bytes, path, progress,
             )?)));
         }
+        if is_iges(&inner) {
+            let bytes = read_gzip(path)?;
+            return Ok(Model::Step(Box::new(iges::read(&bytes, path)?)));
+        }
         return Err(LoadError::UnsupportedFormat {
             path: path.to_path_buf(),
             extension: format!("{inner}.gz"),
@@ -222,6 +246,12 @@ pub fn read_with(path: &Path, progress: &dyn crate::util::Progress) -> Result<Mo
         Ok(Model::Step(Box::new(step::read_with(
             &bytes, path, progress,
         )?)))
+    } else if is_iges(&extension) {
+        let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Ok(Model::Step(Box::new(iges::read(&bytes, path)?)))
     } else if extension.eq_ignore_ascii_case("obj") {
         Ok(Model::Mesh(mesh::read_obj(path)?))
     } else if extension.eq_ignore_ascii_case("stl") {
