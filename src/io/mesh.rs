@@ -1,5 +1,6 @@
 //! Triangle-mesh readers: glTF 2.0 (`.glb`, `.gltf`; every mesh primitive of every node in
-//! the default scene, node transforms applied) with the `gltf` crate, and Wavefront OBJ with
+//! the default scene, node transforms applied; each node with a mesh a part, each primitive a
+//! group in its material's base colour) with the `gltf` crate, and Wavefront OBJ with
 //! `tobj`, PLY with `ply-rs`. The result is welded into one world-space [`TriMesh`] and split into patches
 //! ([`crate::prep::partition`]).
 
@@ -160,6 +161,13 @@ fn gltf_mesh(path: &Path, bytes: &[u8]) -> Result<TriMesh, LoadError> {
         let local = Mat4::from_cols_array_2d(&node.transform().matrix());
         let world = parent * local;
         if let Some(m) = node.mesh() {
+            // Each node with a mesh is a part; each primitive a group in its material's colour.
+            let part = mesh.part_names.len() as u32;
+            mesh.part_names.push(
+                node.name()
+                    .or(m.name())
+                    .map_or_else(|| format!("node {}", node.index()), str::to_owned),
+            );
             for (k, prim) in m.primitives().enumerate() {
                 let what = format!(
                     "mesh {:?} primitive {k}",
@@ -179,6 +187,14 @@ fn gltf_mesh(path: &Path, bytes: &[u8]) -> Result<TriMesh, LoadError> {
                     None => (0..positions.len() as u32).collect(),
                 };
                 append(path, &what, &mut mesh, &positions, &indices, world)?;
+                let [r, g, b, _] = prim.material().pbr_metallic_roughness().base_color_factor();
+                let color =
+                    (prim.material().index().is_some()).then(|| [r, g, b].map(linear_to_srgb));
+                mesh.groups.push(crate::model::mesh::TriGroup {
+                    part,
+                    color,
+                    end: mesh.triangles.len(),
+                });
             }
         }
         stack.extend(node.children().map(|c| (c, world)));
@@ -195,6 +211,20 @@ fn gltf_mesh(path: &Path, bytes: &[u8]) -> Result<TriMesh, LoadError> {
         });
     }
     Ok(mesh)
+}
+
+/// glTF's linear base colour → sRGB, the space colours are drawn in (IEC 61966-2-1).
+fn linear_to_srgb(c: f32) -> f32 {
+    let c = if c.is_finite() {
+        c.clamp(0.0, 1.0)
+    } else {
+        1.0
+    };
+    if c <= 0.003_130_8 {
+        12.92 * c
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    }
 }
 
 /// Reads the faces of a Wavefront OBJ file (polygons are triangulated as fans).

@@ -26,7 +26,7 @@ use crate::mt::{MtHierarchy, MtParts};
 
 /// Version of the file format *and* of the hierarchy build: bump it whenever either changes,
 /// so older caches stop matching.
-pub const FORMAT_VERSION: u32 = 1;
+pub const FORMAT_VERSION: u32 = 2;
 
 const MAGIC: &[u8; 8] = b"PWMTCACH";
 const HEADER: usize = 8 + 4 + 16 + 8 + 16;

@@ -90,6 +90,7 @@ fn binary(bytes: &[u8], n: usize, path: &Path) -> Result<TriMesh, LoadError> {
     let mut mesh = TriMesh {
         positions: Vec::with_capacity(3 * n),
         triangles: Vec::with_capacity(n),
+        ..TriMesh::default()
     };
     let f = |b: &[u8], k: usize| f32::from_le_bytes([b[k], b[k + 1], b[k + 2], b[k + 3]]);
     for (t, rec) in bytes[HEADER..].chunks_exact(RECORD).enumerate() {

@@ -19,9 +19,47 @@ use crate::util::IntMap;
 pub struct TriMesh {
     pub positions: Vec<Vec3>,
     pub triangles: Vec<[u32; 3]>,
+    /// Runs of triangles from one source object (a glTF node's primitive), in order; empty:
+    /// the whole mesh is one unnamed, uncoloured part. Patches never cross a group.
+    pub groups: Vec<TriGroup>,
+    /// Names of the parts groups belong to ([`TriGroup::part`] indexes it).
+    pub part_names: Vec<String>,
+}
+
+/// Triangles `previous end .. end` of a [`TriMesh`]: one part's, in one colour.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TriGroup {
+    /// Index into [`TriMesh::part_names`].
+    pub part: u32,
+    /// Base colour (sRGB, 0..1), when the file gives one.
+    pub color: Option<[f32; 3]>,
+    /// One past the group's last triangle.
+    pub end: usize,
 }
 
 impl TriMesh {
+    /// The group of every triangle (all 0 without groups; triangles past the last group's end
+    /// belong to the last group).
+    pub fn triangle_groups(&self) -> Vec<u32> {
+        let mut out = vec![0u32; self.triangles.len()];
+        let mut start = 0;
+        for (g, group) in self.groups.iter().enumerate() {
+            let end = group.end.min(out.len());
+            out[start.min(end)..end].fill(g as u32);
+            start = end;
+        }
+        if let Some(last) = self.groups.len().checked_sub(1) {
+            let from = start.min(out.len());
+            out[from..].fill(last as u32);
+        }
+        out
+    }
+
+    /// The group record of group index `g` (a default one without groups).
+    pub fn group(&self, g: u32) -> TriGroup {
+        self.groups.get(g as usize).copied().unwrap_or_default()
+    }
+
     /// Merges vertices at bit-identical positions (glTF splits vertices by normal and texture
     /// coordinate) and drops triangles that become degenerate (two equal corners). Returns how
     /// many triangles were dropped.
@@ -42,12 +80,20 @@ impl TriMesh {
             .collect();
         self.positions = positions;
         let before = self.triangles.len();
-        self.triangles = self
-            .triangles
-            .iter()
-            .map(|t| t.map(|i| remap[i as usize]))
-            .filter(|t| t[0] != t[1] && t[1] != t[2] && t[2] != t[0])
+        let groups = self.triangle_groups();
+        let mut kept_groups = Vec::with_capacity(before);
+        self.triangles = (self.triangles.iter().zip(&groups))
+            .map(|(t, &g)| (t.map(|i| remap[i as usize]), g))
+            .filter(|(t, _)| t[0] != t[1] && t[1] != t[2] && t[2] != t[0])
+            .map(|(t, g)| {
+                kept_groups.push(g);
+                t
+            })
             .collect();
+        // Each group ends where its last kept triangle is.
+        for (g, group) in self.groups.iter_mut().enumerate() {
+            group.end = kept_groups.partition_point(|&k| k <= g as u32);
+        }
         before - self.triangles.len()
     }
 }
@@ -215,6 +261,7 @@ mod tests {
                 Vec3::ONE,
             ],
             triangles: vec![[0, 1, 2], [3, 5, 2], [0, 4, 1]],
+            ..TriMesh::default()
         };
         let dropped = m.weld();
         assert_eq!(dropped, 1);
@@ -306,9 +353,54 @@ mod tests {
         let m = TriMesh {
             positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z],
             triangles: vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [2, 0, 3]],
+            ..TriMesh::default()
         };
         let patches = partition(&m, 100);
         assert_eq!(patches.len(), 1);
         assert!(patches[0].borders.is_empty());
+    }
+
+    /// Two groups on one grid (left and right halves, interleaved in triangle order is not
+    /// possible: groups are runs) share edges, yet no patch crosses them; welding a degenerate
+    /// triangle away moves the group ends with it.
+    #[test]
+    fn patches_never_cross_groups_and_weld_keeps_group_ends() {
+        let mut m = grid(16);
+        let half = m.triangles.len() / 2;
+        m.groups = vec![
+            TriGroup {
+                part: 0,
+                color: Some([1.0, 0.0, 0.0]),
+                end: half,
+            },
+            TriGroup {
+                part: 1,
+                color: None,
+                end: m.triangles.len(),
+            },
+        ];
+        m.part_names = vec!["a".into(), "b".into()];
+        let of = m.triangle_groups();
+        let patches = partition(&m, 400);
+        for p in &patches {
+            let g = of[p.source_triangles[0] as usize];
+            assert!(
+                p.source_triangles.iter().all(|&t| of[t as usize] == g),
+                "a patch crosses the groups"
+            );
+        }
+        // Ungrouped, one 400-triangle region spans both halves.
+        let mut plain = m.clone();
+        plain.groups.clear();
+        let crossing = partition(&plain, 400).iter().any(|p| {
+            let g = of[p.source_triangles[0] as usize];
+            p.source_triangles.iter().any(|&t| of[t as usize] != g)
+        });
+        assert!(crossing, "the control: without groups a patch does cross");
+        // A degenerate triangle in group 0 goes; group 0 ends one earlier.
+        m.triangles[0] = [0, 0, 1];
+        assert_eq!(m.weld(), 1);
+        assert_eq!(m.groups[0].end, half - 1);
+        assert_eq!(m.groups[1].end, m.triangles.len());
     }
 }

@@ -183,7 +183,7 @@ pub fn load_with_options(
             }
         }
     });
-    let (parts, bbox, weld_warnings) = mesh_parts(mesh, patch_triangles);
+    let (parts, labels, bbox, weld_warnings) = mesh_parts(mesh, patch_triangles);
     let counts: Vec<usize> = parts.iter().map(|p| p.positions.len()).collect();
     let cached = cache
         .as_ref()
@@ -233,7 +233,7 @@ pub fn load_with_options(
             (parts, Some(pending))
         }
     };
-    let mut scene = scene_of(parts, UpAxis::Y, bbox, weld_warnings);
+    let mut scene = scene_of(parts, &labels, UpAxis::Y, bbox, weld_warnings);
     scene.unit = crate::io::stated_unit(path);
     Ok(Loaded {
         scene,
@@ -268,16 +268,27 @@ pub fn mesh_scene(
     up: UpAxis,
     progress: &dyn Progress,
 ) -> Scene {
-    let (parts, bbox, warnings) = mesh_parts(m, patch_triangles);
+    let (parts, labels, bbox, warnings) = mesh_parts(m, patch_triangles);
     let parts = build_hierarchies(parts, arc_size, progress);
-    scene_of(parts, up, bbox, warnings)
+    scene_of(parts, &labels, up, bbox, warnings)
+}
+
+/// What the patches of a mesh belong to: the part names and each patch's group.
+struct PatchLabels {
+    part_names: Vec<String>,
+    groups: Vec<crate::model::mesh::TriGroup>,
 }
 
 /// The welded mesh's patches (hierarchies not built), its bounding box and warnings.
 fn mesh_parts(
     mut m: TriMesh,
     patch_triangles: usize,
-) -> (Vec<MeshPatch>, (glam::DVec3, glam::DVec3), Vec<String>) {
+) -> (
+    Vec<MeshPatch>,
+    PatchLabels,
+    (glam::DVec3, glam::DVec3),
+    Vec<String>,
+) {
     let dropped = m.weld();
     let mut warnings = Vec::new();
     if dropped > 0 {
@@ -286,7 +297,21 @@ fn mesh_parts(
         ));
     }
     let bbox = bounding_box(m.positions.iter().map(|p| p.as_dvec3())).unwrap_or_default();
-    (partition(&m, patch_triangles), bbox, warnings)
+    let patches = partition(&m, patch_triangles);
+    // A patch lies in one group (partition never crosses them): its first triangle's.
+    let of_triangle = m.triangle_groups();
+    let groups = patches
+        .iter()
+        .map(|p| {
+            let t = p.source_triangles.first().copied().unwrap_or(0) as usize;
+            m.group(of_triangle.get(t).copied().unwrap_or(0))
+        })
+        .collect();
+    let labels = PatchLabels {
+        part_names: std::mem::take(&mut m.part_names),
+        groups,
+    };
+    (patches, labels, bbox, warnings)
 }
 
 /// Every patch's hierarchy built and reduced to `arc_size`, on rayon.
@@ -306,22 +331,44 @@ fn build_hierarchies(
 
 fn scene_of(
     parts: Vec<MeshPatch>,
+    labels: &PatchLabels,
     up: UpAxis,
     bbox: (glam::DVec3, glam::DVec3),
     warnings: Vec<String>,
 ) -> Scene {
+    let named = !labels.part_names.is_empty();
     let patches: Vec<Patch> = parts
         .into_iter()
         .enumerate()
-        .map(|(i, p)| Patch {
-            id: i as u32,
-            bounds: Sphere::around(p.positions.iter().map(|v| v.as_dvec3())),
-            surface: PatchSurface::Mesh(Arc::new(p)),
-            transform: DMat4::IDENTITY,
-            part: 0,
-            color: None,
-            instance: 0,
+        .map(|(i, p)| {
+            let g = labels.groups.get(i).copied().unwrap_or_default();
+            // Without part names every patch is part 0.
+            let part = if named { g.part } else { 0 };
+            Patch {
+                id: i as u32,
+                bounds: Sphere::around(p.positions.iter().map(|v| v.as_dvec3())),
+                surface: PatchSurface::Mesh(Arc::new(p)),
+                transform: DMat4::IDENTITY,
+                part,
+                color: g.color,
+                // One instance per part (the triangles are in world coordinates).
+                instance: part,
+            }
         })
         .collect();
-    Scene::single_part(patches, up, bbox, warnings)
+    let mut scene = Scene::single_part(patches, up, bbox, warnings);
+    if named {
+        scene.parts = (labels.part_names.iter())
+            .map(|name| crate::model::Part { name: name.clone() })
+            .collect();
+        scene.instances = (labels.part_names.iter().enumerate())
+            .map(|(k, name)| crate::model::Instance {
+                name: name.clone(),
+                part: k as u32,
+                transform: DMat4::IDENTITY,
+                shell: None,
+            })
+            .collect();
+    }
+    scene
 }

@@ -41,7 +41,10 @@ fn rows<T: Copy>(groups: usize, items: &[T], key: impl Fn(&T) -> usize) -> (Vec<
     (start, out)
 }
 
+/// Edge adjacency within each [`TriMesh::groups`] run: triangles of different groups (parts
+/// or colours) are never neighbours, so no patch crosses a group.
 fn adjacency(mesh: &TriMesh) -> Adjacency {
+    let tri_group = mesh.triangle_groups();
     let n = mesh.triangles.len();
     let vertices = mesh.positions.len();
     // (smaller vertex, larger vertex, triangle) of every edge, grouped by the smaller vertex,
@@ -61,7 +64,7 @@ fn adjacency(mesh: &TriMesh) -> Adjacency {
         for same in group.chunk_by(|x, y| x.1 == y.1) {
             for &(_, _, a) in same {
                 for &(_, _, b) in same {
-                    if a != b {
+                    if a != b && tri_group[a as usize] == tri_group[b as usize] {
                         pairs.push((a, b));
                     }
                 }
