@@ -14,6 +14,7 @@
 //! `models/x.bpt:17: expected a number for the y coordinate of control point 3 of patch 2,
 //! found "abc"`. Readers never panic on malformed input.
 
+pub mod atomic;
 pub mod bpt;
 pub mod depth;
 pub mod gltf_out;
