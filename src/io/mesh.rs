@@ -8,7 +8,48 @@ use std::path::Path;
 use glam::{Mat4, Vec3};
 
 use super::LoadError;
+use crate::model::bezier::MAX_COORDINATE;
 pub use crate::model::mesh::TriMesh;
+
+/// Whether `mesh` has something to draw (issue 21's bad-input policy): every vertex within
+/// ±[`MAX_COORDINATE`] (the GPU's f32 range for squared lengths) and at least one triangle
+/// with an area. A triangle counts as without area when its corners are collinear or
+/// coincide up to f32 rounding: `|e1 × e2| ≤ 10⁻⁶ |e1| |e2|` (an angle below 10⁻⁶ rad) or
+/// below the rounding of its coordinates. A model made only of such triangles would render as
+/// a blank image; it is [`LoadError::NoFaces`] naming the file instead.
+pub fn check_drawable(path: &Path, mesh: &TriMesh) -> Result<(), LoadError> {
+    if let Some((k, p)) = mesh
+        .positions
+        .iter()
+        .enumerate()
+        .find(|(_, p)| f64::from(p.abs().max_element()) > MAX_COORDINATE)
+    {
+        return Err(LoadError::Unreadable {
+            path: path.to_path_buf(),
+            reason: format!(
+                "vertex {k} at {p} is beyond ±{MAX_COORDINATE:e}, which the GPU's f32 cannot draw: scale the model down"
+            ),
+        });
+    }
+    let has_area = |t: &[u32; 3]| {
+        let [a, b, c] = t.map(|i| mesh.positions[i as usize].as_dvec3());
+        let (e1, e2) = (b - a, c - a);
+        let cross = e1.cross(e2).length();
+        let scale = a.abs().max(b.abs()).max(c.abs()).max_element();
+        let rounding = 4.0 * f64::from(f32::EPSILON) * scale;
+        cross > 1e-6 * e1.length() * e2.length() && cross > rounding * rounding
+    };
+    if mesh.triangles.iter().any(has_area) {
+        return Ok(());
+    }
+    Err(LoadError::NoFaces {
+        path: path.to_path_buf(),
+        reason: format!(
+            "all {} triangles have zero area (collinear or coinciding corners)",
+            mesh.triangles.len()
+        ),
+    })
+}
 
 /// Appends the triangles of a primitive, checking indices and positions.
 fn append(

@@ -215,18 +215,23 @@ pub fn read_with(path: &Path, progress: &dyn crate::util::Progress) -> Result<Mo
         Ok(Model::Step(Box::new(step::read_with(
             &bytes, path, progress,
         )?)))
-    } else if extension.eq_ignore_ascii_case("obj") {
-        Ok(Model::Mesh(mesh::read_obj(path)?))
-    } else if extension.eq_ignore_ascii_case("stl") {
-        Ok(Model::Mesh(stl::read(path)?))
-    } else if extension.eq_ignore_ascii_case("ply") {
-        Ok(Model::Mesh(mesh::read_ply(path)?))
-    } else if extension.eq_ignore_ascii_case("glb") || extension.eq_ignore_ascii_case("gltf") {
-        Ok(Model::Mesh(mesh::read_gltf(path)?))
     } else {
-        Err(LoadError::UnsupportedFormat {
-            path: path.to_path_buf(),
-            extension,
-        })
+        let m = if extension.eq_ignore_ascii_case("obj") {
+            mesh::read_obj(path)?
+        } else if extension.eq_ignore_ascii_case("stl") {
+            stl::read(path)?
+        } else if extension.eq_ignore_ascii_case("ply") {
+            mesh::read_ply(path)?
+        } else if extension.eq_ignore_ascii_case("glb") || extension.eq_ignore_ascii_case("gltf") {
+            mesh::read_gltf(path)?
+        } else {
+            return Err(LoadError::UnsupportedFormat {
+                path: path.to_path_buf(),
+                extension,
+            });
+        };
+        // Nothing drawable (all triangles without area) is an error, not a blank image.
+        mesh::check_drawable(path, &m)?;
+        Ok(Model::Mesh(m))
     }
 }
