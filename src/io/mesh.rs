@@ -106,11 +106,21 @@ fn append(
 /// reached twice — a cycle — is an error), and a panic inside the gltf crates becomes an
 /// error naming the file.
 pub fn read_gltf(path: &Path) -> Result<TriMesh, LoadError> {
-    let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
+    parse_gltf(&read_bytes(path)?, path)
+}
+
+/// The whole file.
+fn read_bytes(path: &Path) -> Result<Vec<u8>, LoadError> {
+    std::fs::read(path).map_err(|source| LoadError::Io {
         path: path.to_path_buf(),
         source,
-    })?;
-    match crate::isolate::isolated(|| gltf_mesh(path, &bytes)) {
+    })
+}
+
+/// As [`read_gltf`], from the file's bytes (relative buffer URIs are still read from
+/// `path`'s folder).
+pub fn parse_gltf(bytes: &[u8], path: &Path) -> Result<TriMesh, LoadError> {
+    match crate::isolate::isolated(|| gltf_mesh(path, bytes)) {
         Ok(result) => result,
         Err(panic) => Err(LoadError::Unreadable {
             path: path.to_path_buf(),
@@ -241,10 +251,13 @@ fn gltf_mesh(path: &Path, bytes: &[u8]) -> Result<TriMesh, LoadError> {
 /// Reads the faces of a Wavefront OBJ file (polygons are triangulated as fans).
 #[cfg(feature = "obj")]
 pub fn read_obj(path: &Path) -> Result<TriMesh, LoadError> {
-    let text = std::fs::read(path).map_err(|source| LoadError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    parse_obj(&read_bytes(path)?, path)
+}
+
+/// As [`read_obj`], from the file's bytes (`path` names it in errors; material files are
+/// never read).
+#[cfg(feature = "obj")]
+pub fn parse_obj(text: &[u8], path: &Path) -> Result<TriMesh, LoadError> {
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: false,
@@ -290,15 +303,17 @@ pub fn read_obj(path: &Path) -> Result<TriMesh, LoadError> {
 /// anything is allocated, and a panic inside the parser becomes an error.
 #[cfg(feature = "ply")]
 pub fn read_ply(path: &Path) -> Result<TriMesh, LoadError> {
+    parse_ply(&read_bytes(path)?, path)
+}
+
+/// As [`read_ply`], from the file's bytes (`path` names it in errors).
+#[cfg(feature = "ply")]
+pub fn parse_ply(bytes: &[u8], path: &Path) -> Result<TriMesh, LoadError> {
     use ply_rs::ply::{DefaultElement, Property};
     let unreadable = |reason: String| LoadError::Unreadable {
         path: path.to_path_buf(),
         reason,
     };
-    let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
     if !bytes.starts_with(b"ply") {
         return Err(unreadable(
             "not a PLY file (it does not start with \"ply\")".into(),

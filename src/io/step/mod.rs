@@ -99,10 +99,13 @@ pub fn read_with(
     }
 
     // truck's view of the same data section (parsed in parallel, see `chunks`).
-    let instances = chunks::entity_instances(&text).map_err(|e| LoadError::Unreadable {
-        path: p(),
-        reason: format!("STEP syntax not accepted by truck-stepio: {e}"),
-    })?;
+    // ruststep's parser panics on some values our scanner accepts (an exponent past i64).
+    let instances = isolated(|| chunks::entity_instances(&text))
+        .unwrap_or_else(|panic| Err(format!("its parser failed ({panic})")))
+        .map_err(|e| LoadError::Unreadable {
+            path: p(),
+            reason: format!("STEP syntax not accepted by truck-stepio: {e}"),
+        })?;
     // B-splines whose knots truck would expand without bound, or whose control points are
     // not references (ruststep panics on them), are not given to truck at all.
     let refused = bspline_check::refused(&file);
