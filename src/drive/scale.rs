@@ -56,8 +56,7 @@ pub fn write_grid(
     n: usize,
     spacing: f64,
 ) -> std::io::Result<()> {
-    let file = std::fs::File::create(path)?;
-    let mut out = std::io::BufWriter::with_capacity(1 << 20, file);
+    let mut out = crate::io::atomic::AtomicFile::create(path)?;
     let copies = (0..n).flat_map(|i| (0..n).map(move |j| (i, j)));
     let patches = copies.flat_map(|(i, j)| {
         let offset = DVec3::new(spacing * i as f64, spacing * j as f64, 0.0);
@@ -81,7 +80,7 @@ pub fn write_grid(
             "a moved patch is invalid: {e}"
         )));
     }
-    std::io::Write::flush(&mut out)
+    out.commit()
 }
 
 /// What a point loads.

@@ -27,7 +27,9 @@
 //! with the byte offset), empty or whitespace-only file ([`LoadError::Empty`]), zero patches
 //! ([`LoadError::NoPatches`]), a token that is not a number, a negative or out-of-range count,
 //! an unexpected end of file or trailing data ([`LoadError::Parse`]), and invalid patches —
-//! degree above [`MAX_DEGREE`], NaN or infinite coordinate, all control points equal
+//! degree above [`MAX_DEGREE`], NaN or infinite coordinate, a coordinate beyond
+//! ±[`MAX_COORDINATE`] (f32's range for squared lengths: such a model cannot be framed or
+//! drawn, so it is an error rather than a warning), all control points equal
 //! ([`LoadError::Patch`]).
 //!
 //! The reader never panics and never allocates in proportion to a count it has not yet seen
@@ -40,7 +42,7 @@ use std::path::Path;
 use glam::DVec3;
 
 use super::LoadError;
-use crate::model::bezier::{BezierPatch, MAX_DEGREE, PatchError};
+use crate::model::bezier::{BezierPatch, MAX_COORDINATE, MAX_DEGREE, PatchError};
 
 /// Largest patch count accepted in a file header.
 pub const MAX_PATCHES: u64 = 10_000_000;
@@ -154,13 +156,19 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Vec<BezierPatch>, LoadError> {
                         format!("expected a number for {}, found {}", what(), show(token)),
                     )
                 })?;
-                if !p[c].is_finite() && non_finite_line.is_none() {
+                let bad = !p[c].is_finite() || p[c].abs() > MAX_COORDINATE;
+                if bad && non_finite_line.is_none() {
                     non_finite_line = Some(line);
                 }
             }
             if let Some(line) = non_finite_line {
                 let [x, y, z] = p;
-                return Err(patch_error(line, PatchError::NonFinite { index, x, y, z }));
+                let e = if p.iter().all(|c| c.is_finite()) {
+                    PatchError::TooFar { index, x, y, z }
+                } else {
+                    PatchError::NonFinite { index, x, y, z }
+                };
+                return Err(patch_error(line, e));
             }
             ctrl.push(DVec3::from_array(p));
         }
@@ -338,7 +346,7 @@ mod tests {
 
     #[test]
     fn written_patches_read_back_exactly() {
-        let odd = [0.1, -1.0 / 3.0, 1e-300, 12345.678901234567, -0.0, 7e22];
+        let odd = [0.1, -1.0 / 3.0, 1e-300, 12345.678901234567, -0.0, 7.3e18];
         let patches: Vec<BezierPatch> = [(1, 2), (3, 3)]
             .iter()
             .enumerate()

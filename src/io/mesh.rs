@@ -9,7 +9,48 @@ use std::path::Path;
 use glam::{Mat4, Vec3};
 
 use super::LoadError;
+use crate::model::bezier::MAX_COORDINATE;
 pub use crate::model::mesh::TriMesh;
+
+/// Whether `mesh` has something to draw (issue 21's bad-input policy): every vertex within
+/// ±[`MAX_COORDINATE`] (the GPU's f32 range for squared lengths) and at least one triangle
+/// with an area. A triangle counts as without area when its corners are collinear or
+/// coincide up to f32 rounding: `|e1 × e2| ≤ 10⁻⁶ |e1| |e2|` (an angle below 10⁻⁶ rad) or
+/// below the rounding of its coordinates. A model made only of such triangles would render as
+/// a blank image; it is [`LoadError::NoFaces`] naming the file instead.
+pub fn check_drawable(path: &Path, mesh: &TriMesh) -> Result<(), LoadError> {
+    if let Some((k, p)) = mesh
+        .positions
+        .iter()
+        .enumerate()
+        .find(|(_, p)| f64::from(p.abs().max_element()) > MAX_COORDINATE)
+    {
+        return Err(LoadError::Unreadable {
+            path: path.to_path_buf(),
+            reason: format!(
+                "vertex {k} at {p} is beyond ±{MAX_COORDINATE:e}, which the GPU's f32 cannot draw: scale the model down"
+            ),
+        });
+    }
+    let has_area = |t: &[u32; 3]| {
+        let [a, b, c] = t.map(|i| mesh.positions[i as usize].as_dvec3());
+        let (e1, e2) = (b - a, c - a);
+        let cross = e1.cross(e2).length();
+        let scale = a.abs().max(b.abs()).max(c.abs()).max_element();
+        let rounding = 4.0 * f64::from(f32::EPSILON) * scale;
+        cross > 1e-6 * e1.length() * e2.length() && cross > rounding * rounding
+    };
+    if mesh.triangles.iter().any(has_area) {
+        return Ok(());
+    }
+    Err(LoadError::NoFaces {
+        path: path.to_path_buf(),
+        reason: format!(
+            "all {} triangles have zero area (collinear or coinciding corners)",
+            mesh.triangles.len()
+        ),
+    })
+}
 
 /// Appends the triangles of a primitive, checking indices and positions.
 fn append(
@@ -66,11 +107,21 @@ fn append(
 /// reached twice — a cycle — is an error), and a panic inside the gltf crates becomes an
 /// error naming the file.
 pub fn read_gltf(path: &Path) -> Result<TriMesh, LoadError> {
-    let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
+    parse_gltf(&read_bytes(path)?, path)
+}
+
+/// The whole file.
+fn read_bytes(path: &Path) -> Result<Vec<u8>, LoadError> {
+    std::fs::read(path).map_err(|source| LoadError::Io {
         path: path.to_path_buf(),
         source,
-    })?;
-    match crate::isolate::isolated(|| gltf_mesh(path, &bytes)) {
+    })
+}
+
+/// As [`read_gltf`], from the file's bytes (relative buffer URIs are still read from
+/// `path`'s folder).
+pub fn parse_gltf(bytes: &[u8], path: &Path) -> Result<TriMesh, LoadError> {
+    match crate::isolate::isolated(|| gltf_mesh(path, bytes)) {
         Ok(result) => result,
         Err(panic) => Err(LoadError::Unreadable {
             path: path.to_path_buf(),
@@ -230,10 +281,13 @@ fn linear_to_srgb(c: f32) -> f32 {
 /// Reads the faces of a Wavefront OBJ file (polygons are triangulated as fans).
 #[cfg(feature = "obj")]
 pub fn read_obj(path: &Path) -> Result<TriMesh, LoadError> {
-    let text = std::fs::read(path).map_err(|source| LoadError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    parse_obj(&read_bytes(path)?, path)
+}
+
+/// As [`read_obj`], from the file's bytes (`path` names it in errors; material files are
+/// never read).
+#[cfg(feature = "obj")]
+pub fn parse_obj(text: &[u8], path: &Path) -> Result<TriMesh, LoadError> {
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: false,
@@ -279,15 +333,17 @@ pub fn read_obj(path: &Path) -> Result<TriMesh, LoadError> {
 /// anything is allocated, and a panic inside the parser becomes an error.
 #[cfg(feature = "ply")]
 pub fn read_ply(path: &Path) -> Result<TriMesh, LoadError> {
+    parse_ply(&read_bytes(path)?, path)
+}
+
+/// As [`read_ply`], from the file's bytes (`path` names it in errors).
+#[cfg(feature = "ply")]
+pub fn parse_ply(bytes: &[u8], path: &Path) -> Result<TriMesh, LoadError> {
     use ply_rs::ply::{DefaultElement, Property};
     let unreadable = |reason: String| LoadError::Unreadable {
         path: path.to_path_buf(),
         reason,
     };
-    let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
     if !bytes.starts_with(b"ply") {
         return Err(unreadable(
             "not a PLY file (it does not start with \"ply\")".into(),

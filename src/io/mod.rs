@@ -15,6 +15,7 @@
 //! `models/x.bpt:17: expected a number for the y coordinate of control point 3 of patch 2,
 //! found "abc"`. Readers never panic on malformed input.
 
+pub mod atomic;
 pub mod bpt;
 pub mod depth;
 pub mod gltf_out;
@@ -252,18 +253,23 @@ pub fn read_with(path: &Path, progress: &dyn crate::util::Progress) -> Result<Mo
             source,
         })?;
         Ok(Model::Step(Box::new(iges::read(&bytes, path)?)))
-    } else if extension.eq_ignore_ascii_case("obj") {
-        Ok(Model::Mesh(mesh::read_obj(path)?))
-    } else if extension.eq_ignore_ascii_case("stl") {
-        Ok(Model::Mesh(stl::read(path)?))
-    } else if extension.eq_ignore_ascii_case("ply") {
-        Ok(Model::Mesh(mesh::read_ply(path)?))
-    } else if extension.eq_ignore_ascii_case("glb") || extension.eq_ignore_ascii_case("gltf") {
-        Ok(Model::Mesh(mesh::read_gltf(path)?))
     } else {
-        Err(LoadError::UnsupportedFormat {
-            path: path.to_path_buf(),
-            extension,
-        })
+        let m = if extension.eq_ignore_ascii_case("obj") {
+            mesh::read_obj(path)?
+        } else if extension.eq_ignore_ascii_case("stl") {
+            stl::read(path)?
+        } else if extension.eq_ignore_ascii_case("ply") {
+            mesh::read_ply(path)?
+        } else if extension.eq_ignore_ascii_case("glb") || extension.eq_ignore_ascii_case("gltf") {
+            mesh::read_gltf(path)?
+        } else {
+            return Err(LoadError::UnsupportedFormat {
+                path: path.to_path_buf(),
+                extension,
+            });
+        };
+        // Nothing drawable (all triangles without area) is an error, not a blank image.
+        mesh::check_drawable(path, &m)?;
+        Ok(Model::Mesh(m))
     }
 }

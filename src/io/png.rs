@@ -1,7 +1,11 @@
-//! PNG output, written to a temporary name in the same directory and renamed, so a failed run
-//! never leaves a half-written image behind.
+//! PNG, GIF, CSV and cache output, through [`super::atomic`]: written to a temporary name in
+//! the same directory, every write, flush and sync checked, and renamed, so a failed run (a
+//! full disk, a signal) never leaves a half-written file behind nor touches the previous one.
 
+use std::io::Write;
 use std::path::{Path, PathBuf};
+
+use super::atomic::AtomicFile;
 
 use thiserror::Error;
 
@@ -27,47 +31,31 @@ pub enum WriteError {
     NotPng { path: PathBuf, extension: String },
 }
 
-/// The temporary name used while `path` is being written.
-fn temp_name(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
-}
-
-/// Writes encoded bytes atomically (temporary file + rename).
+/// Writes through an [`AtomicFile`]: `encode` writes the bytes, then the file is flushed,
+/// synced and renamed over `path` (every step checked; on error the temporary file goes and
+/// the previous file stays).
 fn write_atomic(
     path: &Path,
-    encode: impl FnOnce(&Path) -> Result<(), WriteError>,
+    encode: impl FnOnce(&mut AtomicFile) -> Result<(), WriteError>,
 ) -> Result<(), WriteError> {
-    let tmp = temp_name(path);
-    let result = encode(&tmp).and_then(|()| {
-        std::fs::rename(&tmp, path).map_err(|source| WriteError::Io {
-            path: path.to_owned(),
-            source,
-        })
-    });
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
+    let io = |source| WriteError::Io {
+        path: path.to_owned(),
+        source,
+    };
+    let mut file = AtomicFile::create(path).map_err(io)?;
+    encode(&mut file)?;
+    file.commit().map_err(io)
 }
 
 /// Writes a text file (a CSV) atomically, like the images.
 pub fn write_text(path: &Path, text: &str) -> Result<(), WriteError> {
-    write_atomic(path, |tmp| {
-        std::fs::write(tmp, text).map_err(|source| WriteError::Io {
-            path: path.to_owned(),
-            source,
-        })
-    })
+    write_bytes(path, text.as_bytes())
 }
 
 /// Writes bytes (a cache file) atomically, like the images.
 pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<(), WriteError> {
-    write_atomic(path, |tmp| {
-        std::fs::write(tmp, bytes).map_err(|source| WriteError::Io {
+    write_atomic(path, |file| {
+        file.write_all(bytes).map_err(|source| WriteError::Io {
             path: path.to_owned(),
             source,
         })
@@ -112,9 +100,9 @@ where
             height,
         });
     }
-    write_atomic(path, |tmp| {
+    write_atomic(path, |file| {
         image
-            .save_with_format(tmp, image::ImageFormat::Png)
+            .write_with_encoder(image::codecs::png::PngEncoder::new(file))
             .map_err(|e| encode_err(path, e))
     })
 }
@@ -136,71 +124,107 @@ pub fn write_gray16(
 /// [`GifWriter::finish`]; dropped unfinished, it removes the temporary file.
 pub struct GifWriter {
     path: PathBuf,
-    tmp: PathBuf,
-    encoder: Option<image::codecs::gif::GifEncoder<std::io::BufWriter<std::fs::File>>>,
+    encoder: Option<gif::Encoder<AtomicFile>>,
+    /// The temporary file until the first frame fixes the GIF's size.
+    file: Option<AtomicFile>,
+    /// Width and height, fixed by the first frame.
+    size: (u16, u16),
     delay_ms: u32,
 }
 
 impl GifWriter {
     /// Starts `path`, showing every frame for `delay_ms` and looping forever.
     pub fn create(path: &Path, delay_ms: u32) -> Result<GifWriter, WriteError> {
-        let tmp = temp_name(path);
-        let file = std::fs::File::create(&tmp).map_err(|source| WriteError::Io {
+        let file = AtomicFile::create(path).map_err(|source| WriteError::Io {
             path: path.to_owned(),
             source,
         })?;
-        // Speed 10 of 30: NeuQuant sampling every 10th pixel, a good trade for renders.
-        let mut encoder =
-            image::codecs::gif::GifEncoder::new_with_speed(std::io::BufWriter::new(file), 10);
-        let mut writer = GifWriter {
+        Ok(GifWriter {
             path: path.to_owned(),
-            tmp,
             encoder: None,
+            file: Some(file),
+            size: (0, 0),
             delay_ms,
-        };
-        encoder
-            .set_repeat(image::codecs::gif::Repeat::Infinite)
-            .map_err(|e| encode_err(path, e))?;
-        writer.encoder = Some(encoder);
-        Ok(writer)
+        })
     }
 
-    /// Appends a frame.
+    fn gif_err(&self, e: gif::EncodingError) -> WriteError {
+        match e {
+            gif::EncodingError::Io(source) => WriteError::Io {
+                path: self.path.clone(),
+                source,
+            },
+            other => WriteError::Encode {
+                path: self.path.clone(),
+                reason: other.to_string(),
+            },
+        }
+    }
+
+    /// Appends a frame (every frame must have the first one's size).
     pub fn add(&mut self, image: &image::RgbaImage) -> Result<(), WriteError> {
         let (width, height) = image.dimensions();
-        if width == 0 || height == 0 {
+        let size = (u16::try_from(width), u16::try_from(height));
+        let (Ok(w), Ok(h)) = size else {
+            return Err(WriteError::Encode {
+                path: self.path.clone(),
+                reason: format!("a GIF frame is at most 65535x65535, not {width}x{height}"),
+            });
+        };
+        if w == 0 || h == 0 {
             return Err(WriteError::EmptyImage {
                 path: self.path.clone(),
                 width,
                 height,
             });
         }
+        if let Some(file) = self.file.take() {
+            let started = gif::Encoder::new(file, w, h, &[])
+                .and_then(|mut e| e.set_repeat(gif::Repeat::Infinite).map(|()| e));
+            self.encoder = Some(started.map_err(|e| self.gif_err(e))?);
+            self.size = (w, h);
+        }
         let Some(encoder) = self.encoder.as_mut() else {
-            return Ok(());
+            return Err(WriteError::Encode {
+                path: self.path.clone(),
+                reason: "the GIF failed earlier".to_owned(),
+            });
         };
-        let frame = image::Frame::from_parts(
-            image.clone(),
-            0,
-            0,
-            image::Delay::from_numer_denom_ms(self.delay_ms, 1),
-        );
-        encoder
-            .encode_frame(frame)
-            .map_err(|e| encode_err(&self.path, e))
+        if self.size != (w, h) {
+            return Err(WriteError::Encode {
+                path: self.path.clone(),
+                reason: format!(
+                    "frame of {width}x{height} in a GIF of {}x{}",
+                    self.size.0, self.size.1
+                ),
+            });
+        }
+        let mut pixels = image.as_raw().clone();
+        // Speed 10 of 30: NeuQuant sampling every 10th pixel, a good trade for renders.
+        let mut frame = gif::Frame::from_rgba_speed(w, h, &mut pixels, 10);
+        frame.delay = u16::try_from(self.delay_ms / 10).unwrap_or(u16::MAX);
+        frame.dispose = gif::DisposalMethod::Background;
+        let written = encoder.write_frame(&frame);
+        written.map_err(|e| self.gif_err(e))
     }
 
-    /// Ends the file (the encoder writes the trailer and flushes when dropped), makes sure it
-    /// reached the disk and renames it to its final name.
+    /// Ends the file (the trailer), makes sure it reached the disk and renames it to its
+    /// final name; every step checked.
     pub fn finish(mut self) -> Result<(), WriteError> {
-        drop(self.encoder.take());
-        let io = |source| WriteError::Io {
+        let file = match (self.encoder.take(), self.file.take()) {
+            (Some(encoder), _) => encoder.into_inner().map_err(|e| self.gif_err(e))?,
+            (None, _) => {
+                return Err(WriteError::EmptyImage {
+                    path: self.path.clone(),
+                    width: 0,
+                    height: 0,
+                });
+            }
+        };
+        file.commit().map_err(|source| WriteError::Io {
             path: self.path.clone(),
             source,
-        };
-        std::fs::File::open(&self.tmp)
-            .and_then(|f| f.sync_all())
-            .map_err(io)?;
-        std::fs::rename(&self.tmp, &self.path).map_err(io)
+        })
     }
 }
 
@@ -210,14 +234,6 @@ impl std::fmt::Debug for GifWriter {
             .field("path", &self.path)
             .field("delay_ms", &self.delay_ms)
             .finish_non_exhaustive()
-    }
-}
-
-impl Drop for GifWriter {
-    fn drop(&mut self) {
-        // Unfinished (or failed): leave nothing behind.
-        self.encoder.take();
-        let _ = std::fs::remove_file(&self.tmp);
     }
 }
 
@@ -309,7 +325,6 @@ mod tests {
         write_rgba(&path, &img).expect("write");
         let back = image::open(&path).expect("read").to_rgba8();
         assert_eq!(back, img);
-        assert!(!temp_name(&path).exists());
         let _ = std::fs::remove_file(&path);
     }
 }

@@ -13,6 +13,11 @@ use super::Sphere;
 /// Highest degree accepted in u or v.
 pub const MAX_DEGREE: usize = 15;
 
+/// Largest coordinate magnitude a model may have: ≈ √`f32::MAX`. The GPU draws in `f32`,
+/// where a squared length past ~1.8·10¹⁹ is infinite, and a model beyond it cannot be framed
+/// (its bounding box and the view's ε overflow). Real CAD data (millimetres) stays far below.
+pub const MAX_COORDINATE: f64 = 1e19;
+
 /// Why a set of control points is not a valid patch.
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum PatchError {
@@ -34,6 +39,15 @@ pub enum PatchError {
     },
     #[error("all control points coincide: the patch has no extent")]
     Degenerate,
+    #[error(
+        "control point {index} ({x}, {y}, {z}) is beyond ±{MAX_COORDINATE:e}, which the GPU's f32 cannot draw: scale the model down"
+    )]
+    TooFar {
+        index: usize,
+        x: f64,
+        y: f64,
+        z: f64,
+    },
 }
 
 /// A Bézier patch: `(du+1)·(dv+1)` control points, row-major (row `i` = 0..=du along u,
@@ -95,6 +109,18 @@ impl BezierPatch {
         }
         if let Some((index, p)) = ctrl.iter().enumerate().find(|(_, p)| !p.is_finite()) {
             return Err(PatchError::NonFinite {
+                index,
+                x: p.x,
+                y: p.y,
+                z: p.z,
+            });
+        }
+        if let Some((index, p)) = ctrl
+            .iter()
+            .enumerate()
+            .find(|(_, p)| p.abs().max_element() > MAX_COORDINATE)
+        {
+            return Err(PatchError::TooFar {
                 index,
                 x: p.x,
                 y: p.y,

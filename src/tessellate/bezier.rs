@@ -74,8 +74,11 @@ impl BezierTessellator {
             } else {
                 -1.0
             };
-            // Gain per added vertex row/column.
-            if gain_u / (nv as f64 + 1.0) >= gain_v / (nu as f64 + 1.0) {
+            // Gain per added vertex row/column; a direction at its cap never grows (a NaN
+            // gain from an infinite bound must not push it past the cap).
+            let grow_u = nv >= MAX_SEGMENTS
+                || (nu < MAX_SEGMENTS && gain_u / (nv as f64 + 1.0) >= gain_v / (nu as f64 + 1.0));
+            if grow_u {
                 nu += 1;
             } else {
                 nv += 1;

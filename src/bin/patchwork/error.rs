@@ -131,6 +131,10 @@ pub enum CliError {
     /// `ffmpeg` ran and failed.
     #[error("ffmpeg failed ({status}); the PNGs are in {}", .dir.display())]
     FfmpegFailed { status: ExitStatus, dir: PathBuf },
+    /// `implode` made or found fewer frames than asked for: it never reports such a set as
+    /// written.
+    #[error("implode: {made} of {frames} frames written; the output is incomplete")]
+    ShortRun { frames: usize, made: usize },
     /// An output folder named like a file: `implode -o anim.gif`.
     #[error("{}: -o names the output folder (frames, the GIF and frames.csv go inside it), not a .{extension} file; try -o {}", .path.display(), .suggestion.display())]
     OutputNotFolder {

@@ -4,7 +4,7 @@
 //! shared flag groups and their checks in `args.rs`; errors in `error.rs`; where output goes
 //! (`--json`, `-q`) in `out.rs`. Exit codes: 0 done (or passed), 1 a check or benchmark ran
 //! and failed (or `render --ref` found the image different), 2 an error (`error: …` on
-//! stderr).
+//! stderr), 130 / 143 interrupted by SIGINT / SIGTERM (temporary output files removed first).
 
 mod args;
 mod cmd;
@@ -57,12 +57,35 @@ enum Command {
     Implode(cmd::implode::ImplodeArgs),
 }
 
+/// On SIGINT or SIGTERM: remove the live temporary files and folders of output being written
+/// (`patchwork::io::atomic`), then exit with 128 + the signal's number (130, 143) like a
+/// shell. Without the handler a signal would leave `.NAME.PID.N.tmp` files behind.
+fn remove_temporaries_on_signals() {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM]) else {
+        eprintln!("warning: no SIGINT/SIGTERM handler: an interrupted write may leave a .tmp file");
+        return;
+    };
+    std::thread::spawn(move || {
+        if let Some(signal) = signals.forever().next() {
+            // Held until the process ends: no new temporary file appears after the clean-up.
+            let removed = patchwork::io::atomic::remove_temporaries();
+            eprintln!(
+                "interrupted by signal {signal}: {} temporary output file(s) removed",
+                removed.removed
+            );
+            std::process::exit(128 + signal);
+        }
+    });
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     out::set(out::Mode {
         quiet: cli.quiet,
         json: cli.json,
     });
+    remove_temporaries_on_signals();
     let passed = match &cli.command {
         Command::Render(a) => cmd::render::run(a),
         Command::Stats(a) => cmd::stats::run(a).map(|()| true),

@@ -31,10 +31,7 @@
 //! colours, de-duplication of identical meshes, compression (Draco, meshopt).
 
 use std::borrow::Cow;
-use std::ffi::OsString;
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
 
 use gltf::json;
 
@@ -280,7 +277,7 @@ impl GltfWriteError {
 /// temporary file.
 pub fn write_glb(path: &Path, scene: &ExportScene) -> Result<GltfStats, GltfWriteError> {
     let (bytes, stats) = encode(path, scene)?;
-    write_atomic(path, &bytes).map_err(|source| GltfWriteError::Io {
+    crate::io::atomic::write(path, &bytes).map_err(|source| GltfWriteError::Io {
         path: path.to_owned(),
         source,
     })?;
@@ -314,11 +311,11 @@ pub fn write_gltf(path: &Path, scene: &ExportScene) -> Result<GltfStats, GltfWri
         path: path.to_owned(),
         reason: e.to_string(),
     })?;
-    write_atomic(&bin_path, &bin).map_err(|source| GltfWriteError::Io {
+    crate::io::atomic::write(&bin_path, &bin).map_err(|source| GltfWriteError::Io {
         path: bin_path.clone(),
         source,
     })?;
-    write_atomic(path, &json).map_err(io)?;
+    crate::io::atomic::write(path, &json).map_err(io)?;
     Ok(GltfStats {
         meshes: plan.meshes.len(),
         nodes: plan.nodes.len(),
@@ -591,42 +588,6 @@ fn check_mesh(path: &Path, i: usize, mesh: &ExportMesh) -> Result<(), GltfWriteE
         }
         _ => Ok(()),
     }
-}
-
-/// Distinguishes temporary files of concurrent writes from one process.
-static TEMP_COUNTER: AtomicU64 = AtomicU64::new(0);
-
-/// Writes `bytes` to a temporary file beside `path`, then renames it to `path`. The temporary
-/// file is removed on any failure after it was created (and only then: a file of that name that
-/// already existed is not ours).
-fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    let Some(file_name) = path.file_name() else {
-        return Err(std::io::Error::new(
-            std::io::ErrorKind::InvalidInput,
-            "the path does not name a file",
-        ));
-    };
-    let mut tmp_name = OsString::from(".");
-    tmp_name.push(file_name);
-    tmp_name.push(format!(
-        ".{}.{}.tmp",
-        std::process::id(),
-        TEMP_COUNTER.fetch_add(1, Ordering::Relaxed)
-    ));
-    let tmp = path.with_file_name(tmp_name);
-
-    let mut file = std::fs::File::create_new(&tmp)?;
-    let result = file
-        .write_all(bytes)
-        .and_then(|()| file.sync_all())
-        .and_then(|()| {
-            drop(file);
-            std::fs::rename(&tmp, path)
-        });
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
 }
 
 mod build;

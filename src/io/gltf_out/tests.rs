@@ -6,12 +6,15 @@ use glam::{Mat4, Quat, Vec3};
 
 use super::build::bounds;
 
+/// Distinguishes the test directories of one process.
+static DIRS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+
 /// A fresh, empty directory for one test.
 fn test_dir(tag: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!(
         "patchwork-gltf-{}-{tag}-{}",
         std::process::id(),
-        TEMP_COUNTER.fetch_add(1, Ordering::Relaxed)
+        DIRS.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
     ));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("create test dir");

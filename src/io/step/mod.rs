@@ -13,6 +13,7 @@
 //! can panic runs under [`crate::isolate::isolated`]. Every face is tessellated once at load
 //! at a coarse tolerance: that gives its bounds and rejects faces that cannot be trimmed.
 
+mod bspline_check;
 mod chunks;
 pub mod p21;
 pub mod structure;
@@ -98,20 +99,30 @@ pub fn read_with(
     }
 
     // truck's view of the same data section (parsed in parallel, see `chunks`).
-    let instances = chunks::entity_instances(&text).map_err(|e| LoadError::Unreadable {
-        path: p(),
-        reason: format!("STEP syntax not accepted by truck-stepio: {e}"),
-    })?;
+    // ruststep's parser panics on some values our scanner accepts (an exponent past i64).
+    let instances = isolated(|| chunks::entity_instances(&text))
+        .unwrap_or_else(|panic| Err(format!("its parser failed ({panic})")))
+        .map_err(|e| LoadError::Unreadable {
+            path: p(),
+            reason: format!("STEP syntax not accepted by truck-stepio: {e}"),
+        })?;
+    // B-splines whose knots truck would expand without bound, or whose control points are
+    // not references (ruststep panics on them), are not given to truck at all.
+    let refused = bspline_check::refused(&file);
     let mut table = Table::default();
     let mut unreadable: BTreeMap<String, usize> = BTreeMap::new();
     for inst in &instances {
-        if table.push_instance(inst).is_err() {
-            let name = match inst {
-                truck_stepio::r#in::ruststep::ast::EntityInstance::Simple { record, .. } => {
-                    record.name.clone()
-                }
-                _ => "complex entity".to_owned(),
-            };
+        use truck_stepio::r#in::ruststep::ast::EntityInstance;
+        let (id, name) = match inst {
+            EntityInstance::Simple { id, record } => (*id, record.name.clone()),
+            EntityInstance::Complex { id, .. } => (*id, "complex entity".to_owned()),
+        };
+        if refused.contains_key(&id) {
+            continue;
+        }
+        // ruststep panics ("Invalid key while deserializing PlaceHolder") where a value of
+        // the wrong kind stands for a reference: such an entity is unreadable, not fatal.
+        if !matches!(isolated(|| table.push_instance(inst)), Ok(Ok(_))) {
             *unreadable.entry(name).or_default() += 1;
         }
     }
@@ -130,6 +141,13 @@ pub fn read_with(
         warnings.push(format!(
             "unsupported entities (not drawn): {}",
             list.join(", ")
+        ));
+    }
+    if let Some((id, reason)) = refused.iter().next() {
+        warnings.push(format!(
+            "{} B-spline entities refused, their faces not drawn (#{id}: {reason}{})",
+            refused.len(),
+            if refused.len() > 1 { "; …" } else { "" }
         ));
     }
     if !unreadable.is_empty() {
@@ -195,7 +213,7 @@ pub fn read_with(
     let converted: Vec<(u64, Result<TrimmedFace, String>)> = jobs
         .into_iter()
         .zip(results)
-        .map(|(f, (r, _))| (f, r))
+        .map(|(f, (r, _))| (f, r.map_err(|e| name_refusals(e, &refused))))
         .collect();
 
     if !loose.is_empty() {
@@ -217,6 +235,17 @@ pub fn read_with(
         shell_faces: face_ids,
         warnings,
     })
+}
+
+/// A face's failure that is truck's lookup of an entity we refused, with our reason instead.
+fn name_refusals(reason: String, refused: &BTreeMap<u64, String>) -> String {
+    for (id, why) in refused.iter().take(64) {
+        let lookup = format!("Lookup failed for #{id}");
+        if reason.contains(&lookup) {
+            return reason.replace(&lookup, &format!("#{id} refused: {why}"));
+        }
+    }
+    reason
 }
 
 /// Gives every `AXIS2_PLACEMENT_3D` without a usable reference direction (`$`, or parallel to

@@ -13,7 +13,7 @@ use patchwork::anim::{Explosion, GroupBy};
 use patchwork::drive::implode::{
     AnimOptions, frames_pass, growth_within_bound, run as run_animation,
 };
-use patchwork::io::png;
+use patchwork::io::{atomic, png};
 use patchwork::render::Renderer;
 use patchwork::report::implode::{CrackSummary, FrameTimes, write_frames_csv};
 
@@ -96,6 +96,33 @@ fn create_dir(dir: &Path) -> Result<(), CliError> {
     })
 }
 
+/// The name of frame `k`.
+fn frame_name(k: usize) -> String {
+    format!("frame-{k:04}.png")
+}
+
+/// Whether `name` is one of ours: `frame-` + at least four digits + `.png`.
+fn is_frame_name(name: &str) -> bool {
+    name.strip_prefix("frame-")
+        .and_then(|r| r.strip_suffix(".png"))
+        .is_some_and(|d| d.len() >= 4 && d.bytes().all(|b| b.is_ascii_digit()))
+}
+
+/// How many `frame-NNNN.png` are in `dir`, checked to be `frame-0000.png` … in a row.
+fn frames_in(dir: &Path) -> Result<usize, CliError> {
+    let io = |source| CliError::Io {
+        path: dir.to_owned(),
+        source,
+    };
+    let mut count = 0;
+    for entry in std::fs::read_dir(dir).map_err(io)? {
+        let name = entry.map_err(io)?.file_name();
+        count += usize::from(is_frame_name(&name.to_string_lossy()));
+    }
+    let in_a_row = (0..count).all(|k| dir.join(frame_name(k)).is_file());
+    Ok(if in_a_row { count } else { 0 })
+}
+
 /// Whether the frames passed (always, without `--check`).
 pub fn run(args: &ImplodeArgs) -> Result<bool, CliError> {
     let frames = at_least("--frames", args.frames, 1)?;
@@ -139,25 +166,36 @@ pub fn run(args: &ImplodeArgs) -> Result<bool, CliError> {
         create_dir(dir)?;
     }
     let name = if args.explode { "explode" } else { "implode" };
+    // Everything is written into a fresh folder beside the output and moved in only when the
+    // whole set is written: a failed or interrupted run leaves the previous output as it was,
+    // and a shorter run removes the previous run's extra frames.
+    let stage =
+        atomic::TempDir::beside(&args.output.join(name)).map_err(|source| CliError::CreateDir {
+            path: args.output.clone(),
+            source,
+        })?;
     let mut gif = if args.no_gif {
         None
     } else {
         let delay = (1000 / fps).max(10);
         Some(png::GifWriter::create(
-            &args.output.join(format!("{name}.gif")),
+            &stage.path().join(format!("{name}.gif")),
             delay,
         )?)
     };
     let pb = progress(frames, "frames");
     let mut write_error: Option<CliError> = None;
     let records = run_animation(&mut renderer, &scene, &view, &opts, |r, frame| {
+        if write_error.is_some() {
+            // The run has failed: stop writing (the frames still render; the loop has no exit).
+            pb.inc(1);
+            return Ok(());
+        }
         let img = frame.to_rgba_image();
-        let path = args.output.join(format!("frame-{:04}.png", r.frame));
+        let path = stage.path().join(frame_name(r.frame));
         let written = png::write_rgba(&path, &img)
             .and_then(|()| gif.as_mut().map_or(Ok(()), |g| g.add(&img)));
-        if let Err(e) = written
-            && write_error.is_none()
-        {
+        if let Err(e) = written {
             write_error = Some(e.into());
         }
         pb.inc(1);
@@ -167,15 +205,35 @@ pub fn run(args: &ImplodeArgs) -> Result<bool, CliError> {
     if let Some(e) = write_error {
         return Err(e);
     }
+    if records.len() != frames {
+        return Err(CliError::ShortRun {
+            frames,
+            made: records.len(),
+        });
+    }
     if let Some(g) = gif {
         g.finish()?;
     }
     let mp4 = if args.no_mp4 {
         None
     } else {
-        write_mp4(&args.output, name, fps)?
+        write_mp4(stage.path(), name, fps)?
     };
-    write_frames_csv(&args.output.join("frames.csv"), &records)?;
+    write_frames_csv(&stage.path().join("frames.csv"), &records)?;
+    let moved = stage
+        .move_into(&args.output, is_frame_name)
+        .map_err(|source| CliError::Io {
+            path: args.output.clone(),
+            source,
+        })?;
+    let in_folder = frames_in(&args.output)?;
+    if in_folder != frames || moved.iter().filter(|n| is_frame_name(n)).count() != frames {
+        return Err(CliError::ShortRun {
+            frames,
+            made: in_folder,
+        });
+    }
+    let mp4 = mp4.map(|p| args.output.join(p.file_name().unwrap_or_default()));
     let times = FrameTimes::of(&records);
     data!(
         "{name} of {} by {:?}: {} groups, {} frames at {}x{} — {:.1} frames per second (mean {:.1} ms, p50 {:.1} ms, max {:.1} ms per frame: frame loop, upload, draw; PNG writing not counted)",

@@ -1,0 +1,10 @@
+//! The STL reader (ASCII and binary) and the drawable check.
+#![no_main]
+use libfuzzer_sys::fuzz_target;
+
+fuzz_target!(|data: &[u8]| {
+    let path = std::path::Path::new("fuzz.stl");
+    if let Ok(mesh) = patchwork::io::stl::parse(data, path) {
+        let _ = patchwork::io::mesh::check_drawable(path, &mesh);
+    }
+});
