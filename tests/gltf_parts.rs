@@ -6,6 +6,18 @@ mod common;
 
 use patchwork::model::PatchSurface;
 
+/// The distinct patch colours of a scene.
+fn distinct_colours(s: &patchwork::model::Scene) -> Vec<[u32; 3]> {
+    let mut colours: Vec<[u32; 3]> = s
+        .patches
+        .iter()
+        .filter_map(|p| p.color.map(|c| c.map(f32::to_bits)))
+        .collect();
+    colours.sort();
+    colours.dedup();
+    colours
+}
+
 fn load(name: &str) -> patchwork::model::Scene {
     patchwork::prep::load(&common::root().join("models").join(name)).expect("loads")
 }
@@ -31,13 +43,7 @@ fn alien_has_its_six_parts_and_colours() {
         );
     }
     // More than one colour: the materials differ.
-    let mut colours: Vec<[u32; 3]> = s
-        .patches
-        .iter()
-        .filter_map(|p| p.color.map(|c| c.map(f32::to_bits)))
-        .collect();
-    colours.sort();
-    colours.dedup();
+    let colours = distinct_colours(&s);
     assert!(colours.len() >= 3, "{colours:?}");
     let explosion = patchwork::anim::Explosion::new(&s, patchwork::anim::GroupBy::Parts, 1.0);
     assert_eq!(explosion.groups, 6, "implode --by parts moves 6 groups");
@@ -59,12 +65,6 @@ fn cake_patches_stay_within_one_colour() {
     assert_eq!(triangles, 1332);
     assert!(s.patches.iter().all(|p| p.color.is_some()));
     // Pink icing and brown cake are different patches: at least as many colours as 3.
-    let mut colours: Vec<[u32; 3]> = s
-        .patches
-        .iter()
-        .filter_map(|p| p.color.map(|c| c.map(f32::to_bits)))
-        .collect();
-    colours.sort();
-    colours.dedup();
+    let colours = distinct_colours(&s);
     assert!(colours.len() >= 3, "{colours:?}");
 }

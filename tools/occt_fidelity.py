@@ -6,7 +6,7 @@ models/corpus/*.{stp,step,igs,iges}[.gz]) and every relative tolerance `rel`:
 
   T = rel x diagonal of OCCT's world bounding box (millimetres).
 
-Our side: `patchwork export FILE -o OUT.glb --tolerance T`; the GLB is read with its
+Our side: `patchwork export FILE -o OUT.glb --tolerance T --unit model --up model`; the GLB is read with its
 node hierarchy (world matrix = product along the parents); `asset.extras` or node
 `extras` `{"unit": "mm"|"m", "up": "z"|"y"}` are honoured (default mm, z-up), see
 `read_glb`.
@@ -876,7 +876,14 @@ def run_file(path, rels, pw, max_samples, workdir, seed):
         rng = np.random.default_rng(seed)
         fine = occt.mesh(T / 10)
         glb = os.path.join(workdir, "ours.glb")
-        r = patchwork_cmd(pw, ["export", "-o", glb, "--tolerance", repr(T)], path, plain)
+        # The model's own frame (STEP: z-up millimetres), not glTF's y-up metres: the judge
+        # compares in OCCT's frame (`export`'s axis and unit change is tested in tests/cli_output.rs).
+        r = patchwork_cmd(
+            pw,
+            ["export", "-o", glb, "--tolerance", repr(T), "--unit", "model", "--up", "model"],
+            path,
+            plain,
+        )
         base = {"file": path, "faces": nfaces, "patches": patches, "diag": diag}
         if r.returncode != 0:
             res = dict(base, rel=rel, T=T, fail=["patchwork export failed: " + (r.stderr.strip().splitlines() or ["?"])[-1]])

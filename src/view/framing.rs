@@ -100,7 +100,7 @@ impl ModelFrame {
         let front = (front - up * front.dot(up)).normalize();
         ModelFrame {
             front,
-            right: up.cross(front),
+            right: front.cross(up).normalize() * -1.0,
             up,
         }
     }

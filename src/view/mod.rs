@@ -204,16 +204,8 @@ pub fn fit_near_far(eye: DVec3, target: DVec3, bounds: &Sphere) -> (f64, f64) {
 
 /// A three-quarter view from the front-right, above, for a model whose up axis is `up`.
 pub fn pleasant_direction(up: DVec3) -> DVec3 {
-    let up = up.try_normalize().unwrap_or(DVec3::Y);
-    // "Front" is towards the viewer: −Y for a z-up model, +Z for a y-up model.
-    let front = if up.z.abs() > 0.9 {
-        DVec3::NEG_Y
-    } else {
-        DVec3::Z
-    };
-    let front = (front - up * front.dot(up)).normalize();
-    let right = front.cross(up).normalize() * -1.0;
-    (front + 0.45 * right + 0.55 * up).normalize()
+    let f = ModelFrame::of(up);
+    (f.front + 0.45 * f.right + 0.55 * f.up).normalize()
 }
 
 #[cfg(test)]
