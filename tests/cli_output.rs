@@ -450,6 +450,12 @@ fn implode_frames_the_assembled_model() {
         .concat();
         let o = patchwork(&args);
         assert!(o.status.success(), "{}", text(&o.stderr));
+        if extra.contains(&"--json") {
+            let v = json_of(&o);
+            assert_eq!(v["frames"], 3);
+            assert_eq!(v["groups"], 18, "as1's 18 placed solids fly");
+            assert_eq!(v["check"], Value::Null, "no --check");
+        }
         let last = image::open(dir.join("frame-0002.png"))
             .expect("last frame")
             .to_rgba8();
@@ -457,7 +463,7 @@ fn implode_frames_the_assembled_model() {
             .filter(|p| p.0[..3] != [255, 255, 255])
             .count()
     };
-    let assembled = covered(&[], "implode-assembled");
+    let assembled = covered(&["--json"], "implode-assembled");
     let flight = covered(&["--frame-flight"], "implode-flight");
     let render = render_rgba(&[], "implode-render.png")
         .pixels()

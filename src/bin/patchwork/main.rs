@@ -28,7 +28,7 @@ struct Cli {
     #[arg(short, long, global = true)]
     quiet: bool,
     /// Print the command's results as one JSON object on stdout (render, stats, check,
-    /// export, bench, implode).
+    /// export, implode, bench --flythrough).
     #[arg(long, global = true)]
     json: bool,
 }

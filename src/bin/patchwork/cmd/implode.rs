@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
 use clap::Args;
+use serde_json::json;
 
 use patchwork::view::View;
 
@@ -20,7 +21,7 @@ use patchwork::report::implode::{CrackSummary, FrameTimes, write_frames_csv};
 use super::{load_built, progress};
 use crate::args::{BudgetArgs, CameraArgs, DrawArgs, at_least, distance, lod_options};
 use crate::error::CliError;
-use crate::out::{data, note};
+use crate::out::{self, data, note};
 
 #[derive(Args, Debug)]
 pub struct ImplodeArgs {
@@ -257,13 +258,39 @@ pub fn run(args: &ImplodeArgs) -> Result<bool, CliError> {
         } else {
             format!(", {name}.gif")
         },
-        mp4.map_or(String::new(), |p| format!(", {}", p.display()))
+        mp4.as_ref()
+            .map_or(String::new(), |p| format!(", {}", p.display()))
     );
-    if !args.check {
-        return Ok(true);
-    }
     let pe = camera.pixel_error;
-    let c = CrackSummary::of(&records);
+    let checked = args.check.then(|| {
+        (
+            CrackSummary::of(&records),
+            frames_pass(&records, args.by, explosion.groups, pe),
+        )
+    });
+    out::emit(&json!({
+        "file": args.file.display().to_string(),
+        "output": args.output.display().to_string(),
+        "by": format!("{:?}", args.by).to_lowercase(),
+        "groups": explosion.groups,
+        "frames": times.frames,
+        "size": [view.width, view.height],
+        "frames_per_second": times.per_second,
+        "frame_ms": { "mean": times.mean_ms, "p50": times.p50_ms, "max": times.max_ms },
+        "gif": (!args.no_gif).then(|| format!("{name}.gif")),
+        "mp4": mp4.as_ref().map(|p| p.display().to_string()),
+        "check": checked.as_ref().map(|(c, ok)| json!({
+            "crack_pixels": c.cracks,
+            "frames_with_cracks": c.frames_with_cracks,
+            "last_frame_cracks": c.last,
+            "most_growth": c.most_growth,
+            "worst_growth_px": c.worst_growth_px,
+            "passed": ok,
+        })),
+    }));
+    let Some((c, ok)) = checked else {
+        return Ok(true);
+    };
     let bound = records
         .iter()
         .find_map(|r| r.cracks)
@@ -278,7 +305,6 @@ pub fn run(args: &ImplodeArgs) -> Result<bool, CliError> {
         c.most_growth,
         c.worst_growth_px,
     );
-    let ok = frames_pass(&records, args.by, explosion.groups, pe);
     if !ok {
         note!(
             "check failed: {}",
