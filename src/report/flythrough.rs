@@ -1,6 +1,7 @@
 //! The per-frame table and the frame-rate-target figures of `bench --flythrough`
 //! (`drive::flythrough::run`'s records): CSV rows and the plot.
 
+use super::text::{draw_text, text_height, text_width};
 use crate::drive::flythrough::FrameRecord;
 
 /// Columns of the per-frame table.
@@ -66,13 +67,15 @@ impl TargetSummary {
 /// jump as a vertical black line. Scales: error 0..max(4 × pixel error, largest error), time
 /// 0..max(2 × budget, longest frame), both linear, marked by grid lines every quarter.
 pub fn plot(records: &[FrameRecord], budget_ms: f64, jump_frame: usize) -> image::RgbaImage {
-    let (w, h) = (900u32, 520u32);
+    let (w, h) = (900u32, 560u32);
     let mut img = image::RgbaImage::from_pixel(w, h, image::Rgba([255, 255, 255, 255]));
     let n = records.len().max(2);
-    let panel = |top: u32| (top + 10, top + 240);
+    // Each panel: a title line with the legend above it, the plot below.
+    let panel = |top: u32| (top + 26, top + 256);
     let (err_top, err_bottom) = panel(0);
-    let (time_top, time_bottom) = panel(260);
-    let x_of = |i: usize| 40.0 + (w as f64 - 60.0) * i as f64 / (n - 1) as f64;
+    let (time_top, time_bottom) = panel(262);
+    let left = 56.0;
+    let x_of = |i: usize| left + (w as f64 - left - 20.0) * i as f64 / (n - 1) as f64;
     let pe = records.iter().map(|r| r.pixel_error).fold(0.0, f64::max);
     let err_max = records
         .iter()
@@ -91,12 +94,12 @@ pub fn plot(records: &[FrameRecord], budget_ms: f64, jump_frame: usize) -> image
     for (top, bottom) in [(err_top, err_bottom), (time_top, time_bottom)] {
         for q in 0..=4 {
             let y = top as f64 + (bottom - top) as f64 * q as f64 / 4.0;
-            line(&mut img, (40.0, y), (w as f64 - 20.0, y), grey);
+            line(&mut img, (left, y), (w as f64 - 20.0, y), grey);
         }
         line(
             &mut img,
-            (40.0, top as f64),
-            (40.0, bottom as f64),
+            (left, top as f64),
+            (left, bottom as f64),
             image::Rgba([0, 0, 0, 255]),
         );
     }
@@ -161,7 +164,101 @@ pub fn plot(records: &[FrameRecord], budget_ms: f64, jump_frame: usize) -> image
         (x, time_bottom as f64),
         image::Rgba([0, 0, 0, 255]),
     );
+    let black = image::Rgba([0, 0, 0, 255]);
+    draw_text(
+        &mut img,
+        (x as i64 + 4, err_top as i64 + 4),
+        "JUMP",
+        2,
+        black,
+    );
+    label_panel(
+        &mut img,
+        (err_top, err_bottom),
+        err_max,
+        "SCREEN ERROR (PX)",
+        &[
+            ([220, 0, 0], "MAX"),
+            ([255, 150, 0], "P99"),
+            (dark, "ASKED"),
+        ],
+    );
+    label_panel(
+        &mut img,
+        (time_top, time_bottom),
+        time_max,
+        "TIME PER FRAME (MS)",
+        &[
+            ([0, 70, 220], "FRAME"),
+            ([0, 160, 0], "RE-TESSELLATION"),
+            (dark, "BUDGET"),
+        ],
+    );
+    // The frame axis under the lower panel.
+    let below = time_bottom as i64 + 6;
+    for q in 0..=4 {
+        let frame = (n - 1) * q / 4;
+        let t = frame.to_string();
+        let tx = x_of(frame) as i64 - i64::from(text_width(&t, 2)) / 2;
+        draw_text(&mut img, (tx, below), &t, 2, black);
+    }
+    let name = "FRAME";
+    let nx = i64::from(w) - 20 - i64::from(text_width(name, 2));
+    draw_text(&mut img, (nx, below + 14), name, 2, black);
     img
+}
+
+/// A panel's title and legend (a colour swatch before each series' name) above it, and the
+/// values of its five grid lines at the left.
+fn label_panel(
+    img: &mut image::RgbaImage,
+    (top, bottom): (u32, u32),
+    max: f64,
+    title: &str,
+    legend: &[([u8; 3], &str)],
+) {
+    let black = image::Rgba([0, 0, 0, 255]);
+    let y = top as i64 - 18;
+    draw_text(img, (56, y), title, 2, black);
+    let mut x = 56 + i64::from(text_width(title, 2)) + 24;
+    for (color, name) in legend {
+        let c = image::Rgba([color[0], color[1], color[2], 255]);
+        for dy in 3..6 {
+            line(
+                img,
+                (x as f64, (y + dy) as f64),
+                ((x + 16) as f64, (y + dy) as f64),
+                c,
+            );
+        }
+        draw_text(img, (x + 22, y), name, 2, black);
+        x += 22 + i64::from(text_width(name, 2)) + 20;
+    }
+    for q in 0..=4 {
+        let v = max * (4 - q) as f64 / 4.0;
+        let t = tick(v);
+        let ty = top as i64 + (bottom - top) as i64 * q / 4 - i64::from(text_height(2)) / 2;
+        draw_text(img, (52 - i64::from(text_width(&t, 2)), ty), &t, 2, black);
+    }
+}
+
+/// A grid value in at most 4 characters where it can be (`0`, `0.25`, `12.5`, `480`, `1e4`).
+fn tick(v: f64) -> String {
+    if v == 0.0 {
+        return "0".into();
+    }
+    for decimals in (0..=2).rev() {
+        let t = format!("{v:.decimals$}");
+        let t = if decimals > 0 {
+            t.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            t
+        };
+        if t.len() <= 4 && (t.parse::<f64>().unwrap_or(f64::NAN) - v).abs() <= 0.05 * v.abs() {
+            return t;
+        }
+    }
+    format!("{v:.0e}")
 }
 
 /// A 1-px line (DDA), clipped to the image.
@@ -201,6 +298,53 @@ mod tests {
         assert_eq!(at("draw_ms"), "0.750");
         assert_eq!(at("cpu_ms"), "0.900");
         assert_eq!(at("uploaded_bytes"), "123456");
+    }
+
+    /// The plot names its panels, units and series, and labels its grid and frame axis: there
+    /// is black ink in the title rows, at the left of the grid lines and under the lower
+    /// panel, and each legend colour appears in the legend row.
+    #[test]
+    fn plot_has_titles_legends_and_tick_labels() {
+        let records: Vec<FrameRecord> = (0..30).map(|i| record(i, 20.0 + i as f64, 0.5)).collect();
+        let img = plot(&records, 40.0, 10);
+        let black = image::Rgba([0, 0, 0, 255]);
+        let ink_in = |x0: u32, x1: u32, y0: u32, y1: u32| {
+            (y0..y1)
+                .flat_map(|y| (x0..x1).map(move |x| (x, y)))
+                .filter(|&(x, y)| img.get_pixel(x, y) == &black)
+                .count()
+        };
+        // The titles, exactly: every ink pixel of the text drawn alone is black in the plot.
+        for (text, y) in [("SCREEN ERROR (PX)", 8), ("TIME PER FRAME (MS)", 270)] {
+            let mut alone = image::RgbaImage::from_pixel(900, 560, image::Rgba([255; 4]));
+            draw_text(&mut alone, (56, y), text, 2, black);
+            let missing = (alone.enumerate_pixels())
+                .filter(|(x, y, p)| **p == black && img.get_pixel(*x, *y) != &black)
+                .count();
+            assert_eq!(missing, 0, "title {text:?}");
+        }
+        assert!(
+            ink_in(0, 54, 20, 290) > 30,
+            "grid values of the upper panel"
+        );
+        assert!(ink_in(0, 900, 524, 556) > 30, "frame numbers and axis name");
+        for colour in [[220, 0, 0], [255, 150, 0], [0, 70, 220], [0, 160, 0]] {
+            let c = image::Rgba([colour[0], colour[1], colour[2], 255]);
+            let in_legends = (0..900u32)
+                .flat_map(|x| [(x, 11u32), (x, 273u32)])
+                .any(|(x, y)| img.get_pixel(x, y) == &c);
+            assert!(in_legends, "legend swatch {colour:?}");
+        }
+    }
+
+    #[test]
+    fn ticks_are_short() {
+        assert_eq!(tick(0.0), "0");
+        assert_eq!(tick(0.25), "0.25");
+        assert_eq!(tick(12.5), "12.5");
+        assert_eq!(tick(480.0), "480");
+        assert_eq!(tick(2.0), "2");
+        assert_eq!(tick(12345.0), "1e4");
     }
 
     fn record(frame: usize, frame_ms: f64, pixel_error: f64) -> FrameRecord {

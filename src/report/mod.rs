@@ -7,6 +7,7 @@
 pub mod flythrough;
 pub mod implode;
 pub mod scale;
+pub mod text;
 
 /// A CSV table: `header`, then `row` of every record, each line ending in a newline.
 fn table<T>(header: &str, records: &[T], row: impl Fn(&T) -> String) -> String {
