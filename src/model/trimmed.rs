@@ -139,6 +139,22 @@ pub struct LoopEdge {
     pub forward: bool,
 }
 
+/// Points along boundary loops that bound them: every edge's ends and parameter midpoint
+/// (what a reader's first [`TrimmedFace::bounds`] is made from).
+pub fn loop_points(loops: &[Vec<LoopEdge>]) -> Vec<DVec3> {
+    loops
+        .iter()
+        .flatten()
+        .flat_map(|le| {
+            [
+                le.edge.start,
+                le.edge.end,
+                le.edge.point(0.5 * (le.edge.t0 + le.edge.t1)),
+            ]
+        })
+        .collect()
+}
+
 /// A face: a surface and its boundary loops (outer and holes, in any order; the domain is
 /// what an even-odd rule over all loops encloses in parameter space).
 #[derive(Clone, Debug)]

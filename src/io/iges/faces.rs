@@ -270,17 +270,7 @@ pub fn face(d: &mut Decoder<'_, '_>, e: &Entry) -> Result<TrimmedFace, IgesError
         loops.insert(0, (chain(rect, e.de)?, true));
     }
     let loops: Vec<Vec<LoopEdge>> = loops.into_iter().map(|l| l.0).collect();
-    let pts: Vec<DVec3> = loops
-        .iter()
-        .flatten()
-        .flat_map(|le| {
-            [
-                le.edge.start,
-                le.edge.end,
-                le.edge.point(0.5 * (le.edge.t0 + le.edge.t1)),
-            ]
-        })
-        .collect();
+    let pts = crate::model::trimmed::loop_points(&loops);
     if pts.iter().any(|p| !p.is_finite()) {
         return Err(IgesError::Invalid {
             de: e.de,

@@ -477,17 +477,7 @@ fn convert_face(
     if loops.is_empty() {
         return Err("the face has no edge loop".into());
     }
-    let pts: Vec<DVec3> = loops
-        .iter()
-        .flatten()
-        .flat_map(|le| {
-            [
-                le.edge.start,
-                le.edge.end,
-                le.edge.point(0.5 * (le.edge.t0 + le.edge.t1)),
-            ]
-        })
-        .collect();
+    let pts = crate::model::trimmed::loop_points(&loops);
     let closed =
         isolated(|| TrimmedFace::closed_directions(&surface, 1e-9)).unwrap_or((None, None));
     Ok(TrimmedFace {
