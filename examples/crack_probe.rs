@@ -125,9 +125,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             if best.0 < 1.0 {
                 // The CPU twin of this patch's 6-vertex fat border: does a triangle cover c?
                 let g = patchwork::render::BorderGeometry::of(std::slice::from_ref(m));
-                let eye = view.eye.as_vec3();
+                let viewer = view.viewer().as_vec4();
                 let mut inside = 0;
-                for tri in g.triangles(patchwork::render::FatBorders::Six, eye) {
+                for tri in g.triangles(patchwork::render::FatBorders::Six, viewer) {
                     let q: Vec<(f64, f64)> = tri
                         .iter()
                         .filter_map(|p| view.project(p.as_dvec3()))

@@ -5,6 +5,9 @@
 // displaced by ε perpendicular to one of the directions s_i, t_i, s_{i-1} (or their negations)
 // and to the direction d_i from v_i to the eye, then pushed away from the viewer by ε along d_i.
 // Slot 0 is v_i itself (pushed back); slots 1..6 are v_i1..v_i6 of the paper.
+// The viewer is given in homogeneous coordinates: (eye, 1) for a perspective view, the point at
+// infinity (-forward, 0) for an orthographic one, whose d_i is then the same everywhere:
+// d_i = normalize(viewer.xyz - v_i * viewer.w).
 //
 // The same function runs in the render shader (scene.wgsl) and in a compute twin used by the
 // tests; its Rust CPU twin is `render::fat_border::expand`. Keep all three in step.
@@ -46,12 +49,12 @@ fn fat_border_position(
     prev: vec3<f32>,
     cur: vec3<f32>,
     next: vec3<f32>,
-    eye: vec3<f32>,
+    viewer: vec4<f32>,
     eps: f32,
     code: u32,
 ) -> vec3<f32> {
     let slot = code & 7u;
-    let d = fb_normalize_or(eye - cur, vec3<f32>(0.0, 0.0, 1.0));
+    let d = fb_normalize_or(viewer.xyz - cur * viewer.w, vec3<f32>(0.0, 0.0, 1.0));
     let s_next0 = next - cur;
     let s_prev0 = cur - prev;
     let s_next = fb_normalize_or(s_next0, fb_normalize_or(s_prev0, vec3<f32>(1.0, 0.0, 0.0)));
@@ -178,9 +181,9 @@ fn fb_resolve(i: u32, len: u32) -> vec2<u32> {
     return vec2<u32>(p, s);
 }
 
-// Vertex i (of a template with `len` codes) for an eye at `eye`; `w` holds the point it is
-// expanded from (its shading attributes).
-fn fat_border_vertex(i: u32, len: u32, eye: vec3<f32>) -> vec4<f32> {
+// Vertex i (of a template with `len` codes) for a viewer at `viewer` (homogeneous, see
+// `fat_border_position`); `w` holds the point it is expanded from (its shading attributes).
+fn fat_border_vertex(i: u32, len: u32, viewer: vec4<f32>) -> vec4<f32> {
     let r = fb_resolve(i, len);
     let p = r.x;
     var flag = 0u;
@@ -189,6 +192,6 @@ fn fat_border_vertex(i: u32, len: u32, eye: vec3<f32>) -> vec4<f32> {
     }
     let prev = fb_cur(fb_neighbour(p, false));
     let next = fb_cur(fb_neighbour(p, true));
-    let pos = fat_border_position(prev, fb_cur(p), next, eye, fb_word_f(p, 3u), r.y | flag);
+    let pos = fat_border_position(prev, fb_cur(p), next, viewer, fb_word_f(p, 3u), r.y | flag);
     return vec4<f32>(pos, bitcast<f32>(p));
 }

@@ -4,10 +4,11 @@
 
 struct TwinInput {
     prev: vec4<f32>,
-    cur: vec4<f32>,
+    // xyz: v_i, w: ε.
+    cur_eps: vec4<f32>,
     next: vec4<f32>,
-    // xyz: eye, w: ε.
-    eye_eps: vec4<f32>,
+    // The viewer, homogeneous: (eye, 1) or (-forward, 0).
+    viewer: vec4<f32>,
     // x: slot code (slot | FB_STRAIGHT).
     code: vec4<u32>,
 };
@@ -22,15 +23,15 @@ fn cs_expand(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let q = inputs[i];
-    let p = fat_border_position(q.prev.xyz, q.cur.xyz, q.next.xyz, q.eye_eps.xyz, q.eye_eps.w, q.code.x);
+    let p = fat_border_position(q.prev.xyz, q.cur_eps.xyz, q.next.xyz, q.viewer, q.cur_eps.w, q.code.x);
     outputs[i] = vec4<f32>(p, 1.0);
 }
 
 // Compute twin of the vertex pulling: output i = vertex i over the border points (fb_points,
 // group 1) for a template of `pull.len_count.x` codes.
 struct Pull {
-    // xyz: eye.
-    eye: vec4<f32>,
+    // The viewer, homogeneous: (eye, 1) or (-forward, 0).
+    viewer: vec4<f32>,
     // x: template codes, y: vertices.
     len_count: vec4<u32>,
 };
@@ -43,5 +44,5 @@ fn cs_pull(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (i >= pull.len_count.y) {
         return;
     }
-    outputs[i] = fat_border_vertex(i, pull.len_count.x, pull.eye.xyz);
+    outputs[i] = fat_border_vertex(i, pull.len_count.x, pull.viewer);
 }

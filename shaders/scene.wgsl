@@ -3,7 +3,7 @@
 
 struct Globals {
     view_proj: mat4x4<f32>,
-    // xyz: eye position.
+    // xyz: eye position; w: 1 for a perspective projection, 0 for an orthographic one.
     eye: vec4<f32>,
     // xyz: unit viewing axis (from the eye towards the target).
     forward: vec4<f32>,
@@ -17,6 +17,15 @@ struct Globals {
 };
 
 @group(0) @binding(0) var<uniform> globals: Globals;
+
+// The viewer in homogeneous coordinates (see `fat_border_position`): the eye, or under an
+// orthographic projection the point at infinity behind the camera.
+fn viewer() -> vec4<f32> {
+    if (globals.eye.w == 0.0) {
+        return vec4<f32>(-globals.forward.xyz, 0.0);
+    }
+    return vec4<f32>(globals.eye.xyz, 1.0);
+}
 
 struct VsOut {
     @builtin(position) clip: vec4<f32>,
@@ -50,7 +59,7 @@ fn vs_surface(
 // vertex i of the template with globals.mode.y codes.
 @vertex
 fn vs_border(@builtin(vertex_index) i: u32) -> VsOut {
-    let fb = fat_border_vertex(i, globals.mode.y, globals.eye.xyz);
+    let fb = fat_border_vertex(i, globals.mode.y, viewer());
     let k = bitcast<u32>(fb.w);
     var out: VsOut;
     out.clip = globals.view_proj * vec4<f32>(fb.xyz, 1.0);
@@ -91,7 +100,8 @@ fn fs_color(in: VsOut) -> @location(0) vec4<f32> {
     // of the fin that sticks out of the silhouette; the surface that shows next to that fin
     // is the sheet facing the viewer, whose normal points outwards, the way the fin extends.
     // So the fin's lateral offset (zero on surfaces) breaks the tie near contours.
-    let v = normalize(globals.eye.xyz - in.world);
+    let h_eye = viewer();
+    let v = normalize(h_eye.xyz - in.world * h_eye.w);
     var n = normalize(in.normal);
     let off = in.actual - in.world;
     let side = fb_normalize_or(off - dot(off, v) * v, vec3<f32>(0.0));

@@ -225,8 +225,7 @@ fn a_gap_one_pixel_wider_than_the_fat_borders_is_found() {
             let widest = meshes.iter().map(|m| m.eps_border()).fold(0.0, f64::max);
             let k = nearest_patch(meshes, view);
             let own = meshes[k].eps_border();
-            let eye = view.eye.as_vec3();
-            let step = retreat_border(&mut meshes[k], eye, |p: Vec3| {
+            let step = retreat_border(&mut meshes[k], view.viewer().as_vec4(), |p: Vec3| {
                 let px = view.pixel_size_at(view.view_depth(p.as_dvec3()));
                 (own + widest + px) as f32
             });

@@ -1,10 +1,11 @@
 //! The WGSL fat-border expansion (run in a compute twin on the adapter) and its Rust CPU twin
 //! give the same positions: one displaced vertex from its inputs, and every vertex of a
-//! variant's draw pulled from border points (ring neighbours, templates, collapsed fans).
+//! variant's draw pulled from border points (ring neighbours, templates, collapsed fans);
+//! for perspective viewers (an eye point, w = 1) and orthographic ones (a direction, w = 0).
 
 mod common;
 
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 use patchwork::check::crack::SplitMix64;
 use patchwork::render::fat_border::{
     INFO_CLOSING, INFO_STRAIGHT, SLOTS_PER_POINT, STRAIGHT_FLAG, expand, is_straight, position,
@@ -18,13 +19,13 @@ use wgpu::util::DeviceExt;
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct TwinInput {
     prev: [f32; 4],
-    cur: [f32; 4],
+    cur_eps: [f32; 4],
     next: [f32; 4],
-    eye_eps: [f32; 4],
+    viewer: [f32; 4],
     code: [u32; 4],
 }
 
-fn inputs() -> Vec<(Vec3, Vec3, Vec3, Vec3, f32, u32)> {
+fn inputs() -> Vec<(Vec3, Vec3, Vec3, Vec4, f32, u32)> {
     let mut rng = SplitMix64::new(42);
     let mut r = |s: f64| ((rng.next_f64() * 2.0 - 1.0) * s) as f32;
     let mut out = Vec::new();
@@ -33,11 +34,15 @@ fn inputs() -> Vec<(Vec3, Vec3, Vec3, Vec3, f32, u32)> {
         let prev = cur + Vec3::new(r(0.3), r(0.3), r(0.3));
         let next = cur + Vec3::new(r(0.3), r(0.3), r(0.3));
         let eye = Vec3::new(r(20.0), r(20.0), r(20.0));
+        // An orthographic viewer: the direction towards it, at infinity.
+        let towards = Vec3::new(r(1.0), r(1.0), r(1.0)).normalize_or(Vec3::Z);
         let eps = (r(0.05)).abs() + 1e-4;
-        for slot in 0..=6 {
-            // Both branches of the shader, whatever the joint.
-            out.push((prev, cur, next, eye, eps, slot));
-            out.push((prev, cur, next, eye, eps, slot | STRAIGHT_FLAG));
+        for viewer in [eye.extend(1.0), towards.extend(0.0)] {
+            for slot in 0..=6 {
+                // Both branches of the shader, whatever the joint.
+                out.push((prev, cur, next, viewer, eps, slot));
+                out.push((prev, cur, next, viewer, eps, slot | STRAIGHT_FLAG));
+            }
         }
     }
     // Joints on both sides of the straight threshold, flagged as the CPU decides.
@@ -52,12 +57,19 @@ fn inputs() -> Vec<(Vec3, Vec3, Vec3, Vec3, f32, u32)> {
             0
         };
         for slot in 0..=6 {
-            out.push((prev, cur, next, Vec3::new(1.0, 2.0, 9.0), 0.02, slot | flag));
+            out.push((
+                prev,
+                cur,
+                next,
+                Vec4::new(1.0, 2.0, 9.0, 1.0),
+                0.02,
+                slot | flag,
+            ));
         }
     }
     // Degenerate cases: collapsed segments, a segment seen end-on, a 180° turn.
     let z = Vec3::ZERO;
-    let eye = Vec3::new(0.0, 0.0, 5.0);
+    let eye = Vec4::new(0.0, 0.0, 5.0, 1.0);
     for (p, c, n) in [
         (z, z, z),
         (z, z, Vec3::X),
@@ -66,6 +78,8 @@ fn inputs() -> Vec<(Vec3, Vec3, Vec3, Vec3, f32, u32)> {
     ] {
         for slot in (0..=6).chain((0..=6).map(|s| s | STRAIGHT_FLAG)) {
             out.push((p, c, n, eye, 0.01, slot));
+            // Orthographic, looking along the end-on segment.
+            out.push((p, c, n, Vec4::new(0.0, 0.0, 1.0, 0.0), 0.01, slot));
         }
     }
     out
@@ -155,9 +169,9 @@ fn compute_twin_matches_cpu_twin() {
         .iter()
         .map(|&(p, c, n, e, eps, slot)| TwinInput {
             prev: p.extend(1.0).into(),
-            cur: c.extend(1.0).into(),
+            cur_eps: c.extend(eps).into(),
             next: n.extend(1.0).into(),
-            eye_eps: e.extend(eps).into(),
+            viewer: e.into(),
             code: [slot, 0, 0, 0],
         })
         .collect();
@@ -234,7 +248,7 @@ fn ring_meshes() -> Vec<PatchMesh> {
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct Pull {
-    eye: [f32; 4],
+    viewer: [f32; 4],
     len_count: [u32; 4],
 }
 
@@ -263,11 +277,16 @@ fn pulled_vertices_match_the_cpu_twin() {
     // Every vertex of every point (the closing points' too), but not past the last point.
     let count = (g.points.len() - 1) * SLOTS_PER_POINT;
     let mut checked = 0;
-    for eye in [Vec3::new(3.0, -2.0, 9.0), Vec3::new(-0.5, 0.2, 0.3)] {
+    let orthographic = Vec3::new(0.3, -0.4, 0.8).normalize().extend(0.0);
+    for viewer in [
+        Vec4::new(3.0, -2.0, 9.0, 1.0),
+        Vec4::new(-0.5, 0.2, 0.3, 1.0),
+        orthographic,
+    ] {
         for variant in FatBorders::ALL_ON {
             let codes = g.index_count(variant) / g.points.len();
             let pull = Pull {
-                eye: eye.extend(1.0).into(),
+                viewer: viewer.into(),
                 len_count: [codes as u32, count as u32, 0, 0],
             };
             let params = gpu
@@ -279,7 +298,7 @@ fn pulled_vertices_match_the_cpu_twin() {
                 });
             let out = run_twin(gpu, "cs_pull", count, &[(0, 2, &params), (1, 0, &points)]);
             for (i, o) in out.iter().enumerate() {
-                let (p, j) = position(&g.points, variant, i, eye);
+                let (p, j) = position(&g.points, variant, i, viewer);
                 assert_eq!(o[3].to_bits() as usize, j, "{variant} vertex {i}: point");
                 let gpu_p = Vec3::new(o[0], o[1], o[2]);
                 let eps = g.points[j].eps;

@@ -15,6 +15,7 @@ fn options(frames: usize, budget: Duration) -> FlythroughOptions {
         frames,
         size: (512, 384),
         fov_y: 45f64.to_radians(),
+        ortho: false,
         lod: LodOptions {
             budget,
             ..LodOptions::default()

@@ -411,3 +411,39 @@ fn scripted_quit_still_writes_the_screenshot() {
         "{help}"
     );
 }
+
+/// `--ortho` starts orthographic, framed as `render --ortho` frames it (same extent); the
+/// `5` key toggles back to perspective (a different image); `view --help` names the key.
+#[test]
+fn ortho_flag_and_the_5_key() {
+    let display = Display::open();
+    let ortho = view_with(&display, "ortho", 4, "", &["--ortho"]);
+    let toggled = view_with(&display, "ortho-5", 4, "5", &["--ortho"]);
+    let out = common::scratch("viewer").join("ortho-render.png");
+    let r = Command::new(env!("CARGO_BIN_EXE_patchwork"))
+        .arg("render")
+        .arg(common::root().join("models/teapot.bpt"))
+        .args(["--size", "400x300", "--ortho", "-q", "-o"])
+        .arg(&out)
+        .output()
+        .expect("patchwork runs");
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let rendered = image::open(&out).expect("rendered").to_rgba8();
+    let (a, b) = (extent(&ortho), extent(&rendered));
+    assert!(
+        a.0.abs_diff(b.0) <= 2 && a.1.abs_diff(b.1) <= 2,
+        "viewer {a:?} vs render {b:?}"
+    );
+    let differ = ortho
+        .pixels()
+        .zip(toggled.pixels())
+        .filter(|(p, q)| p.0.iter().zip(q.0).any(|(x, y)| x.abs_diff(y) > 24))
+        .count();
+    assert!(differ > 500, "key 5 changed {differ} pixels");
+    let help = Command::new(env!("CARGO_BIN_EXE_patchwork"))
+        .args(["view", "--help"])
+        .output()
+        .expect("help");
+    let help = String::from_utf8_lossy(&help.stdout);
+    assert!(help.contains("5 orthographic / perspective"), "{help}");
+}

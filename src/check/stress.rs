@@ -29,7 +29,7 @@
 //! Not done: the stress meshes are for checking only (the retreat depends on the eye, and it
 //! is the opposite of what a renderer wants).
 
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
 use crate::model::Scene;
@@ -42,10 +42,12 @@ pub const STRESS_EPS_FRACTION: f64 = 0.25;
 pub const STRESS_RETREAT: f64 = 0.8;
 
 /// Moves every vertex of `mesh`'s border loops by `amount(position)` object units, perpendicular
-/// to the border there and to the direction to `eye`, towards the inside of the patch (the
-/// side of the triangles on the border edges). A vertex on several loops moves once; a vertex
-/// whose border edges have no triangle stays. Returns the largest distance moved.
-pub fn retreat_border(mesh: &mut PatchMesh, eye: Vec3, amount: impl Fn(Vec3) -> f32) -> f32 {
+/// to the border there and to the direction towards the viewer (homogeneous, as
+/// [`View::viewer`]: the eye, or the axis of an orthographic view), towards the inside of the
+/// patch (the side of the triangles on the border edges). A vertex on several loops moves
+/// once; a vertex whose border edges have no triangle stays. Returns the largest distance
+/// moved.
+pub fn retreat_border(mesh: &mut PatchMesh, viewer: Vec4, amount: impl Fn(Vec3) -> f32) -> f32 {
     use std::collections::HashMap;
     let key = |a: u32, b: u32| (a.min(b), a.max(b));
     // Third vertex of a triangle on each border edge.
@@ -90,7 +92,7 @@ pub fn retreat_border(mesh: &mut PatchMesh, eye: Vec3, amount: impl Fn(Vec3) -> 
             }
             let into = inward(prev, cur) + inward(cur, next);
             let v = p[cur as usize];
-            let d = (eye - v).normalize_or_zero();
+            let d = (viewer.truncate() - v * viewer.w).normalize_or_zero();
             let tangent = p[next as usize] - p[prev as usize];
             let side = tangent.cross(d).normalize_or_zero();
             if into == Vec3::ZERO || side == Vec3::ZERO {
@@ -118,7 +120,7 @@ pub fn retreat_border(mesh: &mut PatchMesh, eye: Vec3, amount: impl Fn(Vec3) -> 
 /// with ε. A patch whose fine tessellation already misses ε (or failed) is left as it is.
 pub fn stress_tessellation(scene: &Scene, view: &View, pixel_error: f64) -> Vec<PatchMesh> {
     let mut meshes = tessellate_scene(scene, view, pixel_error * STRESS_EPS_FRACTION);
-    let eye = view.eye.as_vec3();
+    let viewer = view.viewer().as_vec4();
     meshes
         .par_iter_mut()
         .zip(&scene.patches)
@@ -129,7 +131,7 @@ pub fn stress_tessellation(scene: &Scene, view: &View, pixel_error: f64) -> Vec<
                 return;
             }
             let delta = STRESS_RETREAT * (eps - err);
-            let moved = retreat_border(m, eye, |_| delta as f32) as f64;
+            let moved = retreat_border(m, viewer, |_| delta as f32) as f64;
             m.eps_target = eps;
             m.error = err + moved;
         });
@@ -160,7 +162,7 @@ mod tests {
     fn borders_move_inwards_across_the_view_by_the_amount() {
         let mut m = square();
         let eye = Vec3::new(0.5, 0.5, 10.0);
-        let moved = retreat_border(&mut m, eye, |_| 0.1);
+        let moved = retreat_border(&mut m, eye.extend(1.0), |_| 0.1);
         assert!((moved - 0.1).abs() < 1e-6);
         let centre = Vec3::new(0.5, 0.5, 0.0);
         for (before, after) in square().positions.iter().zip(&m.positions) {
@@ -177,7 +179,7 @@ mod tests {
         let mut m = square();
         // Eye far to the side of the +x edge, level with the plane's diagonal.
         let eye = Vec3::new(8.0, 0.5, 3.0);
-        retreat_border(&mut m, eye, |_| 0.05);
+        retreat_border(&mut m, eye.extend(1.0), |_| 0.05);
         for (before, after) in square().positions.iter().zip(&m.positions) {
             assert!((*after - *before).dot(Vec3::new(0.5, 0.5, 0.0) - *before) > 0.0);
         }

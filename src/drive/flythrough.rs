@@ -56,6 +56,9 @@ pub struct FlythroughOptions {
     pub frames: usize,
     pub size: (u32, u32),
     pub fov_y: f64,
+    /// Orthographic views along the same path ([`View::orthographic`]: the zoom shrinks the
+    /// image's height with the distance).
+    pub ortho: bool,
     pub lod: LodOptions,
     /// Frame-rate target mode: pick the pixel error per frame for this frame time.
     pub target: Option<Duration>,
@@ -155,7 +158,8 @@ pub fn run(
     mut on_frame: impl FnMut(&FrameRecord),
 ) -> Result<(Vec<FrameRecord>, FlythroughSummary), CheckError> {
     let n = opts.frames.max(1);
-    let first = camera_path(scene, 0, n, opts.fov_y, opts.size);
+    let first =
+        camera_path(scene, 0, n, opts.fov_y, opts.size).with_ortho(opts.ortho, &scene.bounds);
     let t0 = Instant::now();
     let mut state = FrameState::new(scene, &first, opts.lod);
     let initial_ms = t0.elapsed().as_secs_f64() * 1e3;
@@ -174,7 +178,8 @@ pub fn run(
     let initial_upload = state.upload(renderer)?;
     let initial_upload_ms = state.upload_ms;
     for i in 0..n {
-        let view = camera_path(scene, i, n, opts.fov_y, opts.size);
+        let view =
+            camera_path(scene, i, n, opts.fov_y, opts.size).with_ortho(opts.ortho, &scene.bounds);
         let r = step(renderer, scene, &mut state, &view, &step_opts)?;
         let pixel_error = state.lod.options.pixel_error;
         let record = FrameRecord::of(i, &r, pixel_error);

@@ -109,9 +109,7 @@ impl Renderer {
     }
 
     pub(super) fn globals(&self, view: &View, opts: &RenderOptions) -> Globals {
-        let forward = (view.target - view.eye)
-            .try_normalize()
-            .unwrap_or(DVec3::NEG_Z);
+        let forward = view.forward();
         let right = forward.cross(view.up).try_normalize().unwrap_or(DVec3::X);
         let up = right.cross(forward);
         // A key light from above-left of the viewer.
@@ -120,7 +118,11 @@ impl Renderer {
         let c = opts.surface_color;
         Globals {
             view_proj: view.view_proj_f32().to_cols_array_2d(),
-            eye: f4(view.eye),
+            // w: 1 perspective, 0 orthographic (the shader's `viewer()`).
+            eye: {
+                let v = view.eye.as_vec3();
+                [v.x, v.y, v.z, view.viewer().w as f32]
+            },
             forward: f4(forward),
             light: f4(light),
             color: [c[0], c[1], c[2], 1.0],

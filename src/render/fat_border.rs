@@ -25,7 +25,7 @@
 //! (`fb_resolve`, `fat_border_vertex`); `tests/fat_border_twin.rs` runs the WGSL functions in
 //! a compute twin and compares.
 
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 
 use crate::tessellate::PatchMesh;
 
@@ -178,10 +178,14 @@ pub fn is_straight(prev: Vec3, cur: Vec3, next: Vec3) -> bool {
 }
 
 /// CPU twin of `fat_border_position` (WGSL). `code` = slot (0 = v_i pushed back, 1..6 = eq.
-/// (1)–(6)) plus [`STRAIGHT_FLAG`] for a straight joint.
-pub fn expand(prev: Vec3, cur: Vec3, next: Vec3, eye: Vec3, eps: f32, code: u32) -> Vec3 {
+/// (1)–(6)) plus [`STRAIGHT_FLAG`] for a straight joint. `viewer` is the viewer in
+/// homogeneous coordinates ([`crate::view::View::viewer`]): `(eye, 1)` under perspective, the
+/// point at infinity `(−forward, 0)` under an orthographic projection; the view direction
+/// d_i = normalize(viewer.xyz − v_i · viewer.w) is then the same at every border vertex, so
+/// the push-back runs along the rays and leaves every vertex where it projects.
+pub fn expand(prev: Vec3, cur: Vec3, next: Vec3, viewer: Vec4, eps: f32, code: u32) -> Vec3 {
     let slot = code & 7;
-    let d = normalize_or(eye - cur, Vec3::Z);
+    let d = normalize_or(viewer.truncate() - cur * viewer.w, Vec3::Z);
     let (s_prev, s_next) = segment_dirs(prev, cur, next);
     let sum = s_prev + s_next;
     let t = normalize_or(sum, s_next);
@@ -313,9 +317,14 @@ pub fn resolve(points: &[BorderPoint], variant: FatBorders, i: usize) -> (usize,
     (p, s)
 }
 
-/// CPU twin of `fat_border_vertex` (WGSL): where vertex `i` of `variant`'s draw lands for an
-/// eye at `eye`, and the point it is expanded from.
-pub fn position(points: &[BorderPoint], variant: FatBorders, i: usize, eye: Vec3) -> (Vec3, usize) {
+/// CPU twin of `fat_border_vertex` (WGSL): where vertex `i` of `variant`'s draw lands for a
+/// viewer at `viewer` (homogeneous, see [`expand`]), and the point it is expanded from.
+pub fn position(
+    points: &[BorderPoint],
+    variant: FatBorders,
+    i: usize,
+    viewer: Vec4,
+) -> (Vec3, usize) {
     let (p, slot) = resolve(points, variant, i);
     let q = point(points, p);
     let flag = if q.info & INFO_STRAIGHT != 0 {
@@ -326,7 +335,7 @@ pub fn position(points: &[BorderPoint], variant: FatBorders, i: usize, eye: Vec3
     let at = |k: usize| Vec3::from(point(points, k).cur);
     let (prev, next) = (neighbour(points, p, false), neighbour(points, p, true));
     (
-        expand(at(prev), at(p), at(next), eye, q.eps, slot | flag),
+        expand(at(prev), at(p), at(next), viewer, q.eps, slot | flag),
         p,
     )
 }
@@ -409,13 +418,13 @@ impl BorderGeometry {
         self.points.len() * pattern(variant).len()
     }
 
-    /// The fat-border triangles with nonzero area for an eye at `eye`, expanded on the CPU
-    /// (world positions), in draw order.
-    pub fn triangles(&self, variant: FatBorders, eye: Vec3) -> Vec<[Vec3; 3]> {
+    /// The fat-border triangles with nonzero area for a viewer at `viewer` (homogeneous, see
+    /// [`expand`]), expanded on the CPU (world positions), in draw order.
+    pub fn triangles(&self, variant: FatBorders, viewer: Vec4) -> Vec<[Vec3; 3]> {
         pattern_indices(variant, self.points.len())
             .chunks_exact(3)
             .map(|t| {
-                let v = |k: usize| position(&self.points, variant, t[k] as usize, eye).0;
+                let v = |k: usize| position(&self.points, variant, t[k] as usize, viewer).0;
                 [v(0), v(1), v(2)]
             })
             .filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
@@ -439,13 +448,13 @@ mod tests {
         let eps = 0.01;
         let d = (eye - cur).normalize();
         for slot in 1..=6 {
-            let p = expand(prev, cur, next, eye, eps, slot);
+            let p = expand(prev, cur, next, eye.extend(1.0), eps, slot);
             // Undo the push-back: the rest is an offset of length ε perpendicular to d.
             let off = p - cur + eps * d;
             assert!((off.length() - eps).abs() < 1e-6, "slot {slot}: {off:?}");
             assert!(off.dot(d).abs() < 1e-6);
         }
-        let p0 = expand(prev, cur, next, eye, eps, 0);
+        let p0 = expand(prev, cur, next, eye.extend(1.0), eps, 0);
         assert!((p0 - (cur - eps * d)).length() < 1e-7);
     }
 
@@ -458,7 +467,7 @@ mod tests {
         let eps = 0.01;
         let d = (eye - cur).normalize();
         let m: Vec<Vec3> = (1..=3)
-            .map(|s| expand(prev, cur, next, eye, eps, s | STRAIGHT_FLAG))
+            .map(|s| expand(prev, cur, next, eye.extend(1.0), eps, s | STRAIGHT_FLAG))
             .collect();
         assert!(m[0] == m[1] && m[1] == m[2], "collapsed fan: {m:?}");
         // At least ε from both segment lines (in the view plane), at most 0.4 % more.
@@ -479,9 +488,9 @@ mod tests {
         let eye = Vec3::new(0.3, 0.1, 5.0);
         for flag in [0, STRAIGHT_FLAG] {
             for (a, b) in [(1, 4), (2, 5), (3, 6)] {
-                let pa = expand(prev, cur, next, eye, 0.1, a | flag);
-                let pb = expand(prev, cur, next, eye, 0.1, b | flag);
-                let centre = expand(prev, cur, next, eye, 0.1, flag);
+                let pa = expand(prev, cur, next, eye.extend(1.0), 0.1, a | flag);
+                let pb = expand(prev, cur, next, eye.extend(1.0), 0.1, b | flag);
+                let centre = expand(prev, cur, next, eye.extend(1.0), 0.1, flag);
                 assert!((pa + pb - 2.0 * centre).length() < 1e-6);
             }
         }
@@ -501,8 +510,62 @@ mod tests {
         ];
         for (p, c0, n, e) in cases {
             for code in (0..=6).chain((0..=6).map(|s| s | STRAIGHT_FLAG)) {
-                assert!(expand(p, c0, n, e, 0.1, code).is_finite());
+                assert!(expand(p, c0, n, e.extend(1.0), 0.1, code).is_finite());
+                // Orthographic viewers: along the segment, and a zero direction.
+                for viewer in [e.extend(0.0), Vec3::Z.extend(0.0), Vec4::ZERO] {
+                    assert!(expand(p, c0, n, viewer, 0.1, code).is_finite());
+                }
             }
+        }
+    }
+
+    /// Orthographic: the viewer is the point at infinity (−forward, 0). Every border vertex is
+    /// pushed back along the one viewing axis, so v_i itself stays where it projects and every
+    /// displaced vertex lands ε from it in the image plane, however far from the axis. Pushed
+    /// along the perspective direction from an eye point instead, a vertex off the axis
+    /// drifts sideways in the image (the mutation this test catches).
+    #[test]
+    fn orthographic_push_back_runs_along_the_axis() {
+        let forward = Vec3::new(0.2, -0.3, -1.0).normalize();
+        let viewer = (-forward).extend(0.0);
+        let eps = 0.05;
+        // In the image plane: the part of an offset perpendicular to the axis.
+        let lateral = |v: Vec3| v - forward * v.dot(forward);
+        for cur in [
+            Vec3::ZERO,
+            Vec3::new(8.0, 5.0, -3.0),
+            Vec3::new(-40.0, 2.0, 7.0),
+        ] {
+            let prev = cur - Vec3::new(1.0, 0.2, 0.0);
+            // A sharp joint and a straight one, flagged as the CPU decides.
+            for next in [
+                cur + Vec3::new(0.9, 0.7, 0.1),
+                cur + Vec3::new(1.0, 0.21, 0.0),
+            ] {
+                let flag = if is_straight(prev, cur, next) {
+                    STRAIGHT_FLAG
+                } else {
+                    0
+                };
+                let p0 = expand(prev, cur, next, viewer, eps, flag);
+                assert!(lateral(p0 - cur).length() < 1e-5, "{cur}: {p0}");
+                assert!(((p0 - cur).dot(forward) - eps).abs() < 1e-5);
+                for slot in 1..=6 {
+                    let p = expand(prev, cur, next, viewer, eps, slot | flag);
+                    let off = lateral(p - cur).length();
+                    assert!(
+                        off >= eps * 0.999 && off <= eps * 1.004,
+                        "slot {slot}: {off}"
+                    );
+                }
+            }
+            // The perspective direction from an eye on the axis 10 units back is wrong here
+            // for every vertex off the axis.
+            let next = cur + Vec3::new(0.9, 0.7, 0.1);
+            let eye = -forward * 10.0;
+            let wrong = expand(prev, cur, next, eye.extend(1.0), eps, 0);
+            let drift = lateral(wrong - cur).length();
+            assert_eq!(drift > 1e-3, cur != Vec3::ZERO, "{cur}: {drift}");
         }
     }
 
@@ -553,7 +616,7 @@ mod tests {
         let n = g.points.iter().filter(real).count();
         assert_eq!(g.points.len(), n + 1);
         let eye = Vec3::new(1.0, 0.5, 20.0);
-        let tris = |v| g.triangles(v, eye).len();
+        let tris = |v| g.triangles(v, eye.extend(1.0)).len();
         assert_eq!(tris(FatBorders::Six), 6 * n - 4 * straight);
         assert_eq!(tris(FatBorders::Four), 4 * n - 2 * straight);
         assert_eq!(tris(FatBorders::Two), 2 * n);
@@ -572,7 +635,14 @@ mod tests {
                 let flat = |k: usize| is_straight(at(k + n - 1), at(k), at(k + 1));
                 let point = |k: usize, slot: u32| {
                     let flag = if flat(k) { STRAIGHT_FLAG } else { 0 };
-                    expand(at(k + n - 1), at(k), at(k + 1), eye, eps, slot | flag)
+                    expand(
+                        at(k + n - 1),
+                        at(k),
+                        at(k + 1),
+                        eye.extend(1.0),
+                        eps,
+                        slot | flag,
+                    )
                 };
                 for k in 0..n {
                     for tri in template(variant).chunks_exact(3) {
@@ -609,7 +679,7 @@ mod tests {
                     .into_iter()
                     .filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
                     .collect();
-                assert_eq!(g.triangles(variant, eye), want, "{variant}");
+                assert_eq!(g.triangles(variant, eye.extend(1.0)), want, "{variant}");
             }
         }
     }
@@ -625,8 +695,13 @@ mod tests {
                 let (p, _) = resolve(&g.points, variant, d * SLOTS_PER_POINT + slot);
                 assert_eq!(p, 0, "{variant} slot {slot}");
                 assert_eq!(
-                    position(&g.points, variant, d * SLOTS_PER_POINT + slot, eye),
-                    position(&g.points, variant, slot, eye)
+                    position(
+                        &g.points,
+                        variant,
+                        d * SLOTS_PER_POINT + slot,
+                        eye.extend(1.0)
+                    ),
+                    position(&g.points, variant, slot, eye.extend(1.0))
                 );
             }
         }
@@ -643,7 +718,7 @@ mod tests {
         let eye = Vec3::new(1.0, 0.5, 200.0);
         let ring: Vec<Vec3> = mesh.positions.clone();
         for variant in FatBorders::ALL_ON {
-            let tris = g.triangles(variant, eye);
+            let tris = g.triangles(variant, eye.extend(1.0));
             for w in 0..ring.len() {
                 let (a, b) = (ring[w], ring[(w + 1) % ring.len()]);
                 let dir = (b - a).normalize();

@@ -117,8 +117,12 @@ pub struct Framing {
     /// Turn towards the up axis, degrees; positive moves the eye up (clamped to ±90°).
     pub elevation_deg: f64,
     /// The camera stands `1 + margin` times the distance at which the bounding sphere touches
-    /// the nearer image edges (0: touching; negative crops).
+    /// the nearer image edges (0: touching; negative crops); orthographic: the image is
+    /// `1 + margin` times the size at which the sphere touches them.
     pub margin: f64,
+    /// An orthographic projection ([`super::Projection::Orthographic`]) instead of a
+    /// perspective one.
+    pub ortho: bool,
 }
 
 impl Default for Framing {
@@ -128,6 +132,7 @@ impl Default for Framing {
             azimuth_deg: 0.0,
             elevation_deg: 0.0,
             margin: DEFAULT_MARGIN,
+            ortho: false,
         }
     }
 }
@@ -185,7 +190,14 @@ impl View {
     ) -> View {
         let dir = framing.direction(up);
         let screen_up = Framing::screen_up(dir, up);
-        View::framing_with_margin(bounds, screen_up, dir, fov_y, size, framing.margin)
+        let v = View::framing_with_margin(bounds, screen_up, dir, fov_y, size, framing.margin);
+        if !framing.ortho {
+            return v;
+        }
+        // The sphere's diameter, times 1 + margin, fills the nearer image edges' span.
+        let aspect = size.0.max(1) as f64 / size.1.max(1) as f64;
+        let span = 2.0 * bounds.radius.max(1e-12) * (1.0 + framing.margin).max(1e-3);
+        v.with_ortho_height(span / aspect.min(1.0), bounds)
     }
 
     /// Frames `bounds` looking from direction `dir` (centre → eye), the camera
@@ -302,5 +314,45 @@ mod tests {
             (800, 600),
         );
         assert!((wider.eye.distance(s.center) - 1.5 * d).abs() < 1e-9);
+    }
+
+    /// Orthographic framing: the sphere's diameter fills the nearer image edges at margin
+    /// 0, 1 + margin times that otherwise; the eye stands outside the sphere.
+    #[test]
+    fn orthographic_framing_fits_the_sphere() {
+        let s = unit();
+        let fov = 40f64.to_radians();
+        for (size, margin) in [((800, 600), 0.0), ((600, 800), 0.0), ((800, 600), 0.5)] {
+            let framing = Framing {
+                view: Some(NamedView::Front),
+                margin,
+                ortho: true,
+                ..Framing::default()
+            };
+            let v = View::framed(&s, DVec3::Z, &framing, fov, size);
+            let super::super::Projection::Orthographic { height } = v.projection else {
+                panic!("orthographic");
+            };
+            let width = height * v.aspect();
+            assert!(
+                (height.min(width) - 2.0 * s.radius * (1.0 + margin)).abs() < 1e-9,
+                "{size:?}: {height} x {width}"
+            );
+            assert!(v.near > 0.0 && v.near < v.eye.distance(s.center) - s.radius);
+            // Margin 0: the sphere's right (or top) point lands on the nearer edge.
+            if margin == 0.0 {
+                let edge = if size.0 < size.1 {
+                    v.project(s.center + DVec3::X * s.radius)
+                        .expect("projects")
+                        .0
+                } else {
+                    v.project(s.center + DVec3::Z * s.radius)
+                        .expect("projects")
+                        .1
+                };
+                let want = if size.0 < size.1 { size.0 as f64 } else { 0.0 };
+                assert!((edge - want).abs() < 1e-6, "{size:?}: {edge}");
+            }
+        }
     }
 }

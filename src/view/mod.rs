@@ -11,6 +11,13 @@
 //! sphere, `d = max(|M − eye| − r, 0)`. Nothing nearer than the near plane is visible, so d is
 //! clamped to at least the near-plane distance (otherwise an eye inside a patch's bounding sphere
 //! would ask for ε = 0, an infinitely fine tessellation).
+//!
+//! **Orthographic views** ([`Projection::Orthographic`]) draw parallel rays along the viewing
+//! axis into an image `height` world units tall: a pixel is `height / H` wide at every depth, so
+//! `ε = γ · height / H` for every patch, near or far. The viewer is then a point at infinity,
+//! and everything that needs the direction towards the viewer (fat borders' push-back, shading)
+//! takes it from [`View::viewer`]: `(eye, 1)` under perspective, `(−forward, 0)` under an
+//! orthographic projection.
 
 mod framing;
 
@@ -25,7 +32,18 @@ pub const DEFAULT_PIXEL_ERROR: f64 = 0.5;
 /// Default vertical field of view, in degrees.
 pub const DEFAULT_FOV_Y_DEG: f64 = 45.0;
 
-/// A perspective camera and the image it renders into.
+/// How a view projects onto its image.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum Projection {
+    /// Rays through the eye; vertical field of view [`View::fov_y`].
+    #[default]
+    Perspective,
+    /// Rays parallel to the viewing axis; the image is `height` world units tall (and
+    /// `height · aspect` wide) at every depth.
+    Orthographic { height: f64 },
+}
+
+/// A camera and the image it renders into.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct View {
     pub eye: DVec3,
@@ -37,6 +55,7 @@ pub struct View {
     pub height: u32,
     pub near: f64,
     pub far: f64,
+    pub projection: Projection,
 }
 
 impl View {
@@ -59,7 +78,100 @@ impl View {
             height,
             near,
             far,
+            projection: Projection::Perspective,
         }
+    }
+
+    /// This view under an orthographic projection whose image is as tall as this
+    /// perspective view's frustum at the target (`2 · |target − eye| · tan(fov_y / 2)`): the
+    /// model at the target keeps its size. An orthographic view is returned as it is.
+    pub fn orthographic(self, bounds: &Sphere) -> View {
+        if self.is_orthographic() {
+            return self;
+        }
+        let height = 2.0 * self.eye.distance(self.target) * (self.fov_y * 0.5).tan();
+        self.with_ortho_height(height, bounds)
+    }
+
+    /// This view with `projection` (near/far fitted to `bounds` again; see
+    /// [`View::with_ortho_height`]).
+    pub fn with_projection(self, projection: Projection, bounds: &Sphere) -> View {
+        match projection {
+            Projection::Orthographic { height } => self.with_ortho_height(height, bounds),
+            Projection::Perspective => View::new(
+                self.eye,
+                self.target,
+                self.up,
+                self.fov_y,
+                (self.width, self.height),
+                bounds,
+            ),
+        }
+    }
+
+    /// [`View::orthographic`] when `ortho`, else this view.
+    pub fn with_ortho(self, ortho: bool, bounds: &Sphere) -> View {
+        if ortho {
+            self.orthographic(bounds)
+        } else {
+            self
+        }
+    }
+
+    /// An orthographic view along this view's axis, `height` world units tall. The eye's
+    /// distance changes nothing in the image but the clipping planes, so an eye less than
+    /// one diameter in front of `bounds` is moved back along the axis (the whole model then
+    /// lies in front of the near plane), and near/far are fitted again.
+    pub fn with_ortho_height(self, height: f64, bounds: &Sphere) -> View {
+        let axis = self.forward();
+        let r = bounds.radius.max(1e-9);
+        let ahead = (bounds.center - self.eye).dot(axis);
+        let eye = if ahead < 2.0 * r {
+            self.eye - axis * (2.0 * r - ahead)
+        } else {
+            self.eye
+        };
+        let (near, far) = fit_near_far(eye, eye + axis, bounds);
+        View {
+            eye,
+            target: self.target,
+            near,
+            far,
+            projection: Projection::Orthographic {
+                height: height.max(1e-12),
+            },
+            ..self
+        }
+    }
+
+    pub fn is_orthographic(&self) -> bool {
+        matches!(self.projection, Projection::Orthographic { .. })
+    }
+
+    /// Unit viewing axis, from the eye towards the target.
+    pub fn forward(&self) -> DVec3 {
+        (self.target - self.eye)
+            .try_normalize()
+            .unwrap_or(DVec3::NEG_Z)
+    }
+
+    /// The viewer in homogeneous coordinates: `(eye, 1)` under a perspective projection, the
+    /// point at infinity `(−forward, 0)` under an orthographic one. The direction from a point
+    /// `p` towards the viewer is `normalize(viewer.xyz − p · viewer.w)` (what the fat borders
+    /// push back along, `render::fat_border::expand`).
+    pub fn viewer(&self) -> DVec4 {
+        match self.projection {
+            Projection::Perspective => self.eye.extend(1.0),
+            Projection::Orthographic { .. } => (-self.forward()).extend(0.0),
+        }
+    }
+
+    /// Unit direction from `p` towards the viewer (see [`View::viewer`]).
+    pub fn towards_viewer(&self, p: DVec3) -> DVec3 {
+        let v = self.viewer();
+        (v.truncate() - p * v.w)
+            .try_normalize()
+            .unwrap_or(-self.forward())
     }
 
     /// The default camera: frames the model's bounding sphere from a three-quarter view, above
@@ -89,7 +201,15 @@ impl View {
     }
 
     pub fn proj_matrix(&self) -> DMat4 {
-        DMat4::perspective_rh(self.fov_y, self.aspect(), self.near, self.far)
+        match self.projection {
+            Projection::Perspective => {
+                DMat4::perspective_rh(self.fov_y, self.aspect(), self.near, self.far)
+            }
+            Projection::Orthographic { height } => {
+                let (hw, hh) = (0.5 * height * self.aspect(), 0.5 * height);
+                DMat4::orthographic_rh(-hw, hw, -hh, hh, self.near, self.far)
+            }
+        }
     }
 
     /// World → clip space, in f32 for the GPU.
@@ -97,9 +217,13 @@ impl View {
         (self.proj_matrix() * self.view_matrix()).as_mat4()
     }
 
-    /// Object-space size of one pixel at distance `d` from the eye.
+    /// Object-space size of one pixel at distance `d` from the eye (the same at every
+    /// distance under an orthographic projection).
     pub fn pixel_size_at(&self, d: f64) -> f64 {
-        d * 2.0 * (self.fov_y * 0.5).tan() / self.height as f64
+        match self.projection {
+            Projection::Perspective => d * 2.0 * (self.fov_y * 0.5).tan() / self.height as f64,
+            Projection::Orthographic { height } => height / self.height as f64,
+        }
     }
 
     /// ε for a patch with bounding sphere `s` at pixel error `pixel_error` (see module doc).
@@ -135,35 +259,46 @@ impl View {
     /// The view's frustum, with the view matrix and side-plane slopes computed once: for
     /// testing many spheres per frame.
     pub fn frustum(&self) -> Frustum {
-        let ty = (self.fov_y * 0.5).tan();
-        let tx = ty * self.aspect();
+        // Side planes |a| = o + t · depth: through the eye (o = 0) under perspective,
+        // parallel to the axis (t = 0) under an orthographic projection.
+        let (ty, oy) = match self.projection {
+            Projection::Perspective => ((self.fov_y * 0.5).tan(), 0.0),
+            Projection::Orthographic { height } => (0.0, 0.5 * height),
+        };
+        let (tx, ox) = (ty * self.aspect(), oy * self.aspect());
         Frustum {
             view: self.view_matrix(),
             near: self.near,
             far: self.far,
             tx,
             ty,
+            ox,
+            oy,
             nx: (1.0 + tx * tx).sqrt(),
             ny: (1.0 + ty * ty).sqrt(),
         }
     }
 
     /// Projects a world point to pixel coordinates (x right, y down, centres at half-integers)
-    /// and linear view depth. `None` behind the eye.
+    /// and linear view depth. `None` behind the eye (perspective; an orthographic view
+    /// projects every point).
     pub fn project(&self, p: DVec3) -> Option<(f64, f64, f64)> {
-        let clip: DVec4 = self.proj_matrix() * self.view_matrix() * p.extend(1.0);
+        let at = self.view_matrix() * p.extend(1.0);
+        let clip: DVec4 = self.proj_matrix() * at;
         if clip.w <= 0.0 {
             return None;
         }
         let ndc = clip.truncate() / clip.w;
         let x = (ndc.x * 0.5 + 0.5) * self.width as f64;
         let y = (0.5 - ndc.y * 0.5) * self.height as f64;
-        Some((x, y, clip.w))
+        Some((x, y, -at.z))
     }
 }
 
-/// A view frustum ready for many sphere tests ([`View::frustum`]): side planes through the
-/// eye, `|x| = tx · depth` and `|y| = ty · depth` in view space, and the near and far planes.
+/// A view frustum ready for many sphere tests ([`View::frustum`]): side planes
+/// `|x| = ox + tx · depth` and `|y| = oy + ty · depth` in view space (through the eye under
+/// perspective, parallel to the axis under an orthographic projection), and the near and far
+/// planes.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Frustum {
     view: DMat4,
@@ -171,6 +306,8 @@ pub struct Frustum {
     far: f64,
     tx: f64,
     ty: f64,
+    ox: f64,
+    oy: f64,
     /// Plane normalisers √(1 + t²).
     nx: f64,
     ny: f64,
@@ -185,9 +322,9 @@ impl Frustum {
         if depth + s.radius < self.near || depth - s.radius > self.far {
             return false;
         }
-        // Distance outside the side plane `|a| = t · depth` (planes through the eye).
-        let within = |a: f64, t: f64, n: f64| (a.abs() - t * depth) / n <= s.radius;
-        within(c.x, self.tx, self.nx) && within(c.y, self.ty, self.ny)
+        // Distance outside the side plane `|a| = o + t · depth`.
+        let within = |a: f64, o: f64, t: f64, n: f64| (a.abs() - o - t * depth) / n <= s.radius;
+        within(c.x, self.ox, self.tx, self.nx) && within(c.y, self.oy, self.ty, self.ny)
     }
 }
 
@@ -319,5 +456,99 @@ mod tests {
             let (x, y, _) = v.project(s.center + dir * s.radius).expect("in front");
             assert!((0.0..=1024.0).contains(&x) && (0.0..=768.0).contains(&y));
         }
+    }
+
+    fn ortho() -> View {
+        View::new(
+            DVec3::new(0.0, 0.0, 10.0),
+            DVec3::ZERO,
+            DVec3::Y,
+            60f64.to_radians(),
+            (800, 600),
+            &unit(),
+        )
+        .orthographic(&unit())
+    }
+
+    /// Orthographic: ε = γ · height / H for every patch, near or far (the perspective ε
+    /// grows with the distance).
+    #[test]
+    fn orthographic_eps_does_not_depend_on_distance() {
+        let v = ortho();
+        let height = 2.0 * 10.0 * 30f64.to_radians().tan();
+        assert_eq!(v.projection, Projection::Orthographic { height });
+        let at = |z: f64| Sphere {
+            center: DVec3::new(0.0, 0.0, z),
+            radius: 0.1,
+        };
+        let expect = 0.5 * height / 600.0;
+        for z in [0.9, 0.0, -0.9] {
+            assert!((v.eps_obj(&at(z), 0.5) - expect).abs() < 1e-15, "z = {z}");
+        }
+        let p = View {
+            projection: Projection::Perspective,
+            ..v
+        };
+        assert!(p.eps_obj(&at(-0.9), 0.5) > 1.1 * p.eps_obj(&at(0.9), 0.5));
+    }
+
+    /// Orthographic frustum: a box |x| ≤ w/2, |y| ≤ h/2 at every depth; projection maps
+    /// equal lengths at any depth to equal pixel lengths; the viewer is at infinity.
+    #[test]
+    fn orthographic_frustum_and_projection_are_parallel() {
+        let v = ortho();
+        let Projection::Orthographic { height } = v.projection else {
+            panic!("orthographic")
+        };
+        let (hh, hw) = (0.5 * height, 0.5 * height * v.aspect());
+        let sphere = |x: f64, y: f64, z: f64| Sphere {
+            center: DVec3::new(x, y, z),
+            radius: 0.1,
+        };
+        for z in [0.9, -0.9] {
+            assert!(v.sees_sphere(&sphere(0.0, hh + 0.09, z)));
+            assert!(!v.sees_sphere(&sphere(0.0, hh + 0.11, z)));
+            assert!(v.sees_sphere(&sphere(-hw - 0.09, 0.0, z)));
+            assert!(!v.sees_sphere(&sphere(-hw - 0.11, 0.0, z)));
+        }
+        // Beyond the far plane and in front of the near plane.
+        assert!(!v.sees_sphere(&sphere(0.0, 0.0, v.eye.z - v.far - 0.2)));
+        assert!(!v.sees_sphere(&sphere(0.0, 0.0, v.eye.z - v.near + 0.2)));
+        // A unit segment along x at depths 9.1 and 10.9 is equally long on the image.
+        let len = |z: f64| {
+            let a = v.project(DVec3::new(0.0, 0.0, z)).expect("projects");
+            let b = v.project(DVec3::new(1.0, 0.0, z)).expect("projects");
+            assert!((a.2 - (v.eye.z - z)).abs() < 1e-9, "linear depth");
+            b.0 - a.0
+        };
+        assert!((len(0.9) - len(-0.9)).abs() < 1e-9);
+        assert!((len(0.0) - 600.0 / height).abs() < 1e-9);
+        assert_eq!(v.viewer(), DVec4::new(0.0, 0.0, 1.0, 0.0));
+        assert_eq!(v.towards_viewer(DVec3::new(5.0, -3.0, 1.0)), DVec3::Z);
+        assert_eq!(
+            View::new(v.eye, v.target, v.up, v.fov_y, (8, 6), &unit()).viewer(),
+            v.eye.extend(1.0)
+        );
+    }
+
+    /// An eye inside (or near) the model is moved back along the axis: the model lies
+    /// between near and far, and the image stays the same.
+    #[test]
+    fn orthographic_eye_stands_outside_the_model() {
+        let s = unit();
+        let v = View::new(
+            DVec3::new(0.0, 0.0, 0.5),
+            DVec3::ZERO,
+            DVec3::Y,
+            1.0,
+            (64, 64),
+            &s,
+        )
+        .with_ortho_height(3.0, &s);
+        assert!(v.eye.z >= 2.0 - 1e-12, "{}", v.eye);
+        assert!(v.near > 0.0 && v.near < v.eye.z - 1.0 && v.far > v.eye.z + 1.0);
+        assert!(v.sees_sphere(&s));
+        let (x, y, _) = v.project(DVec3::new(1.5, 0.0, 0.0)).expect("projects");
+        assert!((x - 64.0).abs() < 1e-9 && (y - 32.0).abs() < 1e-9);
     }
 }

@@ -11,7 +11,8 @@
 //! Mouse: left drag orbits, right drag (or shift + left) pans, wheel zooms. Keys: arrows orbit,
 //! PageUp/PageDown zoom, `f` fit to view, `b` fat borders off/6/4/2, `w` wireframe, `i` patch-ID
 //! colours, `h` error heat map (screen error per patch: blue finer than asked, green on target,
-//! red coarser), `+`/`-` pixel error ×2 / ÷2, `p` screenshot, space plays/pauses the
+//! red coarser), `5` orthographic / perspective projection (as f3d), `+`/`-` pixel error ×2 /
+//! ÷2, `p` screenshot, space plays/pauses the
 //! implosion loop (`--implode`: parts or patches fly together, stay, fly apart, ... — see
 //! [`crate::anim`]), `q`/Esc quit. The title shows fps, triangles, queue length and the
 //! largest screen error.
@@ -35,7 +36,7 @@ use crate::model::Scene;
 use crate::render::gpu::Gpu;
 use crate::render::{FatBorders, Frame, RenderError, RenderOptions, Renderer, Shading};
 use crate::tessellate::PatchMesh;
-use crate::view::{Framing, View};
+use crate::view::{Framing, Projection, View};
 
 mod orbit;
 mod overlay;
@@ -78,7 +79,7 @@ fn os_reason(e: &str) -> &str {
 /// window on stderr).
 pub const CONTROLS: &str = "\
 Mouse: left drag orbits, right drag (or shift + left drag) pans, the wheel zooms.
-Keys:  arrows orbit, PageUp / PageDown zoom, f fit to view,
+Keys:  arrows orbit, PageUp / PageDown zoom, f fit to view, 5 orthographic / perspective,
        b fat borders off / 6 / 4 / 2, w wireframe, i patch-ID colours,
        h screen-error heat map (blue finer than asked, green on target, red coarser),
        + / - pixel error x2 / /2, p screenshot, space play / pause (--implode),
@@ -221,6 +222,7 @@ pub fn run_upgrading(
             Orbit { target, ..fit }
         }
     };
+    let ortho = options.framing.ortho;
     let mut app = App {
         scene,
         upgrade,
@@ -231,6 +233,7 @@ pub fn run_upgrading(
         error: None,
         fat_borders: FatBorders::Six,
         shading: Shading::Lit,
+        ortho,
         wireframe: false,
         heat: false,
         drag: None,
@@ -275,6 +278,8 @@ struct App {
     error: Option<ViewerError>,
     fat_borders: FatBorders,
     shading: Shading,
+    /// Orthographic projection (`5` toggles).
+    ortho: bool,
     wireframe: bool,
     heat: bool,
     drag: Option<MouseButton>,
@@ -367,8 +372,12 @@ impl App {
     }
 
     fn view(&self, w: u32, h: u32) -> View {
-        self.orbit
-            .view(&self.scene, self.options.fov_y, (w.max(1), h.max(1)))
+        self.orbit.view(
+            &self.scene,
+            self.options.fov_y,
+            (w.max(1), h.max(1)),
+            self.ortho,
+        )
     }
 
     /// One frame; returns whether the queue still has work.
@@ -495,7 +504,10 @@ impl App {
                 self.orbit = Orbit::fit(
                     &self.scene,
                     self.options.up,
-                    &self.options.framing,
+                    &Framing {
+                        ortho: self.ortho,
+                        ..self.options.framing
+                    },
                     self.options.fov_y,
                     size,
                 );
@@ -509,6 +521,7 @@ impl App {
                 }
             }
             Key::Character("w") => self.wireframe = !self.wireframe,
+            Key::Character("5") => self.ortho = !self.ortho,
             Key::Named(NamedKey::Space) => {
                 if let Some(p) = self.playing.as_mut() {
                     p.paused = !p.paused;
@@ -708,6 +721,31 @@ mod tests {
         let o = Orbit::fit(&s, None, &Framing::default(), fov, (640, 480));
         let v = View::framing(&s.bounds, s.up.vector(), fov, (640, 480));
         assert!(o.eye().distance(v.eye) < 1e-9, "{} vs {}", o.eye(), v.eye);
+    }
+
+    /// Orthographic (`--ortho`, key `5`): the fitted orbit's view is the framed orthographic
+    /// view, and zooming shrinks its height.
+    #[test]
+    fn orbit_fit_reproduces_the_orthographic_framing() {
+        let s = scene();
+        let fov = 45f64.to_radians();
+        let framing = Framing {
+            ortho: true,
+            ..Framing::default()
+        };
+        let mut o = Orbit::fit(&s, None, &framing, fov, (640, 480));
+        let want = View::framed(&s.bounds, s.up.vector(), &framing, fov, (640, 480));
+        let got = o.view(&s, fov, (640, 480), true);
+        let height = |v: &View| match v.projection {
+            Projection::Orthographic { height } => height,
+            Projection::Perspective => panic!("perspective"),
+        };
+        assert!((height(&got) - height(&want)).abs() < 1e-9);
+        assert!((got.forward() - want.forward()).length() < 1e-9);
+        assert!(!o.view(&s, fov, (640, 480), false).is_orthographic());
+        o.zoom(0.5);
+        let closer = o.view(&s, fov, (640, 480), true);
+        assert!((height(&closer) - 0.5 * height(&want)).abs() < 1e-9);
     }
 
     #[test]

@@ -15,7 +15,9 @@ pub struct Orbit {
 }
 
 impl Orbit {
-    /// The camera of [`View::framed`] (fit to view, from the framing's direction).
+    /// The camera of [`View::framed`] (fit to view, from the framing's direction). For an
+    /// orthographic framing the distance is the one whose [`Orbit::view`] is the framed
+    /// view's height (`height = 2 · distance · tan(fov_y / 2)`).
     pub fn fit(
         scene: &Scene,
         up: Option<DVec3>,
@@ -25,7 +27,11 @@ impl Orbit {
     ) -> Orbit {
         let up = up.unwrap_or_else(|| scene.up.vector());
         let v = View::framed(&scene.bounds, up, framing, fov_y, size);
-        Orbit::looking(v.eye, v.target, up)
+        let mut o = Orbit::looking(v.eye, v.target, up);
+        if let Projection::Orthographic { height } = v.projection {
+            o.distance = height / (2.0 * (fov_y * 0.5).tan());
+        }
+        o
     }
 
     /// The orbit whose camera stands at `eye` looking at `target` (pitch kept within ±89°).
@@ -60,8 +66,11 @@ impl Orbit {
         self.target + dir * self.distance
     }
 
-    pub fn view(&self, scene: &Scene, fov_y: f64, size: (u32, u32)) -> View {
+    /// The camera, perspective or (`ortho`) orthographic as tall as the perspective view at
+    /// the target ([`View::orthographic`]): zooming changes the height the same way.
+    pub fn view(&self, scene: &Scene, fov_y: f64, size: (u32, u32), ortho: bool) -> View {
         View::new(self.eye(), self.target, self.up, fov_y, size, &scene.bounds)
+            .with_ortho(ortho, &scene.bounds)
     }
 
     pub fn rotate(&mut self, dyaw: f64, dpitch: f64) {

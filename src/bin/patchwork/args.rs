@@ -195,6 +195,11 @@ pub struct CameraArgs {
     /// Vertical field of view in degrees.
     #[arg(long, default_value_t = view::DEFAULT_FOV_Y_DEG)]
     pub fov: f64,
+    /// Orthographic projection: parallel rays, sizes independent of depth. The framing view
+    /// fits the model's bounding sphere (with --margin); with --eye the image is as tall as
+    /// the perspective view's at the target.
+    #[arg(long)]
+    pub ortho: bool,
     /// Allowed screen-space error in pixels (ε per patch follows from it).
     #[arg(long, default_value_t = view::DEFAULT_PIXEL_ERROR)]
     pub pixel_error: f64,
@@ -228,6 +233,7 @@ impl CameraArgs {
                 azimuth_deg: finite("--azimuth", self.azimuth)?,
                 elevation_deg: finite("--elevation", self.elevation)?,
                 margin: margin(self.margin)?,
+                ortho: self.ortho,
             },
         })
     }
@@ -253,6 +259,7 @@ impl Camera {
                     return Err(CliError::UpAlongView { up, direction });
                 }
                 View::new(eye, target, up, fov, size, &scene.bounds)
+                    .with_ortho(self.framing.ortho, &scene.bounds)
             }
             None => {
                 let mut v = View::framed(&scene.bounds, up, &self.framing, fov, size);
@@ -261,6 +268,7 @@ impl Camera {
                 v.target = target;
                 // The framing's screen up: the model's up, or its back in a top view.
                 View::new(v.eye, v.target, v.up, fov, size, &scene.bounds)
+                    .with_projection(v.projection, &scene.bounds)
             }
         };
         Ok(view)

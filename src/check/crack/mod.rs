@@ -408,6 +408,9 @@ pub struct CheckOptions {
     pub pixel_error: f64,
     pub size: (u32, u32),
     pub fov_y: f64,
+    /// Orthographic views ([`View::orthographic`] of each random view: the image as tall as
+    /// the perspective view's at its target).
+    pub ortho: bool,
     /// Variants to measure; include [`FatBorders::Off`] to show the cracks they cover.
     pub variants: Vec<FatBorders>,
     /// Draw the stress tessellation ([`super::stress::stress_tessellation`]): every border
@@ -430,6 +433,7 @@ impl Default for CheckOptions {
             pixel_error: crate::view::DEFAULT_PIXEL_ERROR,
             size: (512, 384),
             fov_y: crate::view::DEFAULT_FOV_Y_DEG.to_radians(),
+            ortho: false,
             variants: vec![
                 FatBorders::Off,
                 FatBorders::Six,
@@ -621,7 +625,8 @@ pub fn run_check_with(
 ) -> Result<CheckReport, CheckError> {
     let mut report = CheckReport::default();
     for index in 0..opts.views {
-        let view = random_view(scene, opts.seed, index, opts.size, opts.fov_y);
+        let view = random_view(scene, opts.seed, index, opts.size, opts.fov_y)
+            .with_ortho(opts.ortho, &scene.bounds);
         let (ref_meshes, grid) = reference_meshes(scene, &view, opts.pixel_error);
         let judge = Judge::new(renderer, &ref_meshes, &view, opts.pixel_error)?;
         let mut meshes = if opts.stress {

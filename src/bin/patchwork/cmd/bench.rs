@@ -70,6 +70,10 @@ pub struct BenchArgs {
     /// Vertical field of view in degrees.
     #[arg(long, default_value_t = view::DEFAULT_FOV_Y_DEG)]
     fov: f64,
+    /// `--flythrough`: orthographic views along the same path (zooming shrinks the image's
+    /// height).
+    #[arg(long, conflicts_with = "scale")]
+    ortho: bool,
     /// Skip the per-frame crack measurement (it renders a reference; not timed either way).
     #[arg(long)]
     no_cracks: bool,
@@ -134,6 +138,7 @@ pub fn run(args: &BenchArgs) -> Result<bool, CliError> {
         frames,
         size: args.size,
         fov_y,
+        ortho: args.ortho,
         lod: LodOptions {
             instancing: !args.no_instancing,
             ..lod_options(pixel_error, budget)

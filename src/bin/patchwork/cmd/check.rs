@@ -35,6 +35,9 @@ pub struct CheckArgs {
     /// Vertical field of view in degrees.
     #[arg(long, default_value_t = view::DEFAULT_FOV_Y_DEG)]
     fov: f64,
+    /// Orthographic views (each as tall as the perspective view's at its target).
+    #[arg(long)]
+    ortho: bool,
     /// Write actual and crack-mask images of views with cracks or growth into this folder.
     #[arg(long)]
     save_failures: Option<PathBuf>,
@@ -70,6 +73,7 @@ pub fn run(args: &CheckArgs) -> Result<bool, CliError> {
         pixel_error,
         size: args.size,
         fov_y,
+        ortho: args.ortho,
         save_failures: args.save_failures.clone(),
         stress: args.stress,
         narrowed_width: args.narrowed_width,

@@ -148,7 +148,8 @@ pub fn run(args: &ImplodeArgs) -> Result<bool, CliError> {
         framed.fov_y,
         (framed.width, framed.height),
         &flight.bounds,
-    );
+    )
+    .with_projection(framed.projection, &flight.bounds);
     create_dir(&args.output)?;
     let mut renderer = Renderer::new()?;
     renderer.primitives = args.draw.primitives.primitives;

@@ -12,7 +12,7 @@ use serde_json::{Value, json};
 use patchwork::check::fidelity::{FaceFidelity, measure_meshes};
 use patchwork::model::{Scene, UpAxis, bounding_box};
 use patchwork::tessellate::{MeshStats, PatchMesh, tessellate_scene};
-use patchwork::view::View;
+use patchwork::view::{Projection, View};
 
 use super::load_built;
 use crate::args::{Camera, CameraArgs};
@@ -140,6 +140,15 @@ pub fn run(args: &StatsArgs) -> Result<(), CliError> {
         view.eye.y,
         view.eye.z
     );
+    match view.projection {
+        Projection::Perspective => data!(
+            "projection        perspective, {:.1}° vertical field of view",
+            view.fov_y.to_degrees()
+        ),
+        Projection::Orthographic { height } => {
+            data!("projection        orthographic, {height:.4} units tall")
+        }
+    }
     if out::text() {
         print_memory(&scene, &s);
         if args.parts {
@@ -239,6 +248,16 @@ fn json_report(
         "threads": rayon::current_num_threads(),
         "eye": vec3(view.eye),
         "target": vec3(view.target),
+        "projection": match view.projection {
+            Projection::Perspective => json!({
+                "kind": "perspective",
+                "fov_y_deg": view.fov_y.to_degrees(),
+            }),
+            Projection::Orthographic { height } => json!({
+                "kind": "orthographic",
+                "height": height,
+            }),
+        },
         "memory": {
             "scene_bytes": m.total(),
             "mesh_bytes": s.bytes,
