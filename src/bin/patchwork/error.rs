@@ -99,6 +99,16 @@ pub enum CliError {
     #[error("say which benchmark: --flythrough or --scale")]
     NoBenchmark,
     /// `bench --flythrough` needs exactly one model.
+    #[error(
+        "reading a model from stdin (`-`) needs --format EXT (step, iges, bpt, glb, obj, ply, stl, …)"
+    )]
+    StdinFormat,
+    #[error("--format {0:?}: expected a file extension such as step, glb or step.gz")]
+    BadFormat(String),
+    #[error("{reason}")]
+    Stdin { reason: String },
+    #[error("{failed} of {total} files failed (each error above)")]
+    FilesFailed { failed: usize, total: usize },
     #[error("bench --flythrough takes one model file, got {0}")]
     FlythroughFiles(usize),
     #[error(transparent)]

@@ -31,6 +31,10 @@ struct Cli {
     /// export, implode, bench --flythrough).
     #[arg(long, global = true)]
     json: bool,
+    /// Format of a model read from stdin (`-` as the file): its extension (step, stp, iges,
+    /// igs, bpt, glb, obj, ply, stl; step.gz, iges.gz).
+    #[arg(long, global = true, value_name = "EXT")]
+    format: Option<String>,
 }
 
 #[derive(Subcommand, Debug)]
@@ -85,10 +89,11 @@ fn main() -> ExitCode {
         quiet: cli.quiet,
         json: cli.json,
     });
+    cmd::set_stdin_format(cli.format.clone());
     remove_temporaries_on_signals();
     let passed = match &cli.command {
         Command::Render(a) => cmd::render::run(a),
-        Command::Stats(a) => cmd::stats::run(a).map(|()| true),
+        Command::Stats(a) => cmd::stats::run(a),
         Command::Check(a) => cmd::check::run(a),
         Command::Export(a) => cmd::export::run(a).map(|()| true),
         Command::Bench(a) => cmd::bench::run(a),

@@ -1,7 +1,7 @@
 //! `patchwork check`: random views with fat borders off and on; crack and growth pixels per
 //! view and in sum. Exit code 1 when fat borders leave a crack.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use clap::Args;
 use serde_json::json;
@@ -13,11 +13,14 @@ use patchwork::view;
 use super::{load_built, progress};
 use crate::args::{PrimitivesArg, at_least, fov_y, parse_size, pixel_error};
 use crate::error::CliError;
-use crate::out::{self, data, note};
+use crate::out::{data, note};
 
 #[derive(Args, Debug)]
 pub struct CheckArgs {
-    file: PathBuf,
+    /// Model files (`-` reads stdin, with --format); several: one block (one JSON object in
+    /// an array) per file, exit code the worst.
+    #[arg(required = true)]
+    files: Vec<PathBuf>,
     #[command(flatten)]
     cache: crate::args::CacheArgs,
     /// Number of random views.
@@ -52,15 +55,32 @@ pub struct CheckArgs {
     narrowed_width: Option<f64>,
 }
 
-/// Whether the check passed (no crack pixel with fat borders).
+/// Whether the check passed (no crack pixel with fat borders) for every file.
 pub fn run(args: &CheckArgs) -> Result<bool, CliError> {
+    let mut renderer = None;
+    super::for_each_file(&args.files, |file| run_one(args, file, &mut renderer))
+}
+
+/// One file's check: printed as text, returned with its JSON object. The renderer is made
+/// once, after the first file loads (a missing file is reported first).
+fn run_one(
+    args: &CheckArgs,
+    file: &Path,
+    renderer: &mut Option<Renderer>,
+) -> Result<(bool, serde_json::Value), CliError> {
     let fov_y = fov_y(args.fov)?;
     let pixel_error = pixel_error(args.pixel_error)?;
     let views = at_least("--views", args.views, 1)?;
-    let scene = load_built(&args.file, &args.cache)?;
-    let mut renderer = Renderer::new()?;
-    renderer.primitives = args.primitives.primitives;
-    note!("adapter: {}", renderer.gpu().describe());
+    let scene = load_built(file, &args.cache)?;
+    let renderer = match renderer {
+        Some(r) => r,
+        None => {
+            let mut r = Renderer::new()?;
+            r.primitives = args.primitives.primitives;
+            note!("adapter: {}", r.gpu().describe());
+            renderer.insert(r)
+        }
+    };
     if let Some(dir) = &args.save_failures {
         std::fs::create_dir_all(dir).map_err(|source| CliError::Io {
             path: dir.clone(),
@@ -93,7 +113,7 @@ pub fn run(args: &CheckArgs) -> Result<bool, CliError> {
         header.join("  "),
         "growth(6)"
     );
-    let report = run_check(&mut renderer, &scene, &opts, |r| {
+    let report = run_check(renderer, &scene, &opts, |r| {
         let cells: Vec<String> = r
             .counts
             .iter()
@@ -163,8 +183,8 @@ pub fn run(args: &CheckArgs) -> Result<bool, CliError> {
             "inside": t.inside,
         })
     };
-    out::emit(&json!({
-        "file": args.file.display().to_string(),
+    let value = json!({
+        "file": file.display().to_string(),
         "views": views,
         "pixel_error": pixel_error,
         "size": [args.size.0, args.size.1],
@@ -182,7 +202,7 @@ pub fn run(args: &CheckArgs) -> Result<bool, CliError> {
             }).collect::<Vec<_>>(),
         })),
         "crack_free": ok,
-    }));
+    });
     data!(
         "{}",
         if ok {
@@ -191,5 +211,5 @@ pub fn run(args: &CheckArgs) -> Result<bool, CliError> {
             "FAIL: crack pixels with fat borders"
         }
     );
-    Ok(ok)
+    Ok((ok, value))
 }

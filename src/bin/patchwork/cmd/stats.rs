@@ -1,7 +1,7 @@
 //! `patchwork stats`: tessellate for a view and print the figures (and the worst faces, the
 //! placed solids).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use clap::Args;
@@ -21,7 +21,10 @@ use crate::out::{self, data};
 
 #[derive(Args, Debug)]
 pub struct StatsArgs {
-    file: PathBuf,
+    /// Model files (`-` reads stdin, with --format); several: one block (one JSON object in
+    /// an array) per file.
+    #[arg(required = true)]
+    files: Vec<PathBuf>,
     #[command(flatten)]
     cache: crate::args::CacheArgs,
     #[command(flatten)]
@@ -35,9 +38,14 @@ pub struct StatsArgs {
     faces: usize,
 }
 
-pub fn run(args: &StatsArgs) -> Result<(), CliError> {
+pub fn run(args: &StatsArgs) -> Result<bool, CliError> {
+    super::for_each_file(&args.files, |file| Ok((true, run_one(args, file)?)))
+}
+
+/// One file's figures: printed as text, returned as JSON.
+fn run_one(args: &StatsArgs, file: &Path) -> Result<Value, CliError> {
     let t_load = Instant::now();
-    let scene = load_built(&args.file, &args.cache)?;
+    let scene = load_built(file, &args.cache)?;
     let load_ms = t_load.elapsed().as_secs_f64() * 1e3;
     let camera = args.camera.validate()?;
     let view = camera.view(&scene)?;
@@ -48,13 +56,13 @@ pub fn run(args: &StatsArgs) -> Result<(), CliError> {
     let dt = t0.elapsed();
     let s = MeshStats::of(&meshes);
     let faces = measure_meshes(&scene, &meshes);
+    let report = json_report(
+        args, file, &scene, &view, &camera, &s, &faces, &meshes, load_ms, dt,
+    );
     if out::json() {
-        out::emit(&json_report(
-            args, &scene, &view, &camera, &s, &faces, &meshes, load_ms, dt,
-        ));
-        return Ok(());
+        return Ok(report);
     }
-    data!("file              {}", args.file.display());
+    data!("file              {}", file.display());
     data!("load              {load_ms:.0} ms");
     let (lo, hi) = scene.bbox;
     let unit = scene.unit.unwrap_or("model units (the format states none)");
@@ -155,7 +163,7 @@ pub fn run(args: &StatsArgs) -> Result<(), CliError> {
             print_parts(&scene, &meshes);
         }
     }
-    Ok(())
+    Ok(report)
 }
 
 fn up_name(up: UpAxis) -> &'static str {
@@ -192,6 +200,7 @@ fn vec3(v: DVec3) -> Value {
 #[allow(clippy::too_many_arguments)]
 fn json_report(
     args: &StatsArgs,
+    file: &Path,
     scene: &Scene,
     view: &View,
     camera: &Camera,
@@ -222,7 +231,7 @@ fn json_report(
     });
     let m = scene.memory();
     let mut report = json!({
-        "file": args.file.display().to_string(),
+        "file": file.display().to_string(),
         "load_ms": load_ms,
         "bbox": { "min": vec3(lo), "max": vec3(hi) },
         "centre": vec3((lo + hi) * 0.5),
