@@ -159,3 +159,65 @@ fn stdin_with_format() {
     let v: Value = serde_json::from_slice(&o.stdout).expect("JSON");
     assert_eq!(v["unit"], "mm");
 }
+
+/// `render a b`: one scene, each file a top-level part (`--only b` keeps one file).
+#[test]
+fn render_draws_several_files_as_one_scene() {
+    let (teapot, screw) = (model("teapot.bpt"), model("screw.step"));
+    let out = common::scratch("cli-inputs").join("two.png");
+    let render = |extra: &[&str]| -> Value {
+        let mut args = vec![
+            "render",
+            teapot.as_str(),
+            screw.as_str(),
+            "--json",
+            "--size",
+        ];
+        args.extend(["160x120", "-o", out.to_str().expect("utf-8 path")]);
+        args.extend(extra);
+        let o = patchwork(&args, None);
+        assert!(o.status.success(), "{}", text(&o.stderr));
+        serde_json::from_slice(&o.stdout).expect("JSON")
+    };
+    assert_eq!(render(&[])["patches"], 32 + 10);
+    assert_eq!(render(&["--only", "screw.step"])["patches"], 10);
+    assert_eq!(render(&["--hide", "screw.step"])["patches"], 32);
+}
+
+/// Merging a glTF (metres, drawn where its points are) with a STEP file (millimetres, placed
+/// faces): in either order the STEP file is scaled into metres, and the merge says so.
+#[test]
+fn a_merge_puts_every_file_in_one_unit() {
+    use patchwork::model::merge::{Named, merge};
+    let load = |name: &str| Named {
+        name: name.to_owned(),
+        scene: common::load(name),
+    };
+    let screw = common::load("screw.step");
+    for order in [["alien.glb", "screw.step"], ["screw.step", "alien.glb"]] {
+        let m = merge(order.iter().map(|n| load(n)).collect()).expect("merged");
+        assert_eq!(m.scene.unit, Some("m"));
+        assert!(
+            m.notes
+                .iter()
+                .any(|n| n.contains("screw.step: mm scaled to m")),
+            "{:?}",
+            m.notes
+        );
+        let scaled: Vec<_> = m
+            .scene
+            .patches
+            .iter()
+            .filter(|p| {
+                m.scene.instances[p.instance as usize]
+                    .name
+                    .starts_with("screw.step")
+            })
+            .collect();
+        assert_eq!(scaled.len(), screw.patches.len());
+        for (p, q) in scaled.iter().zip(&screw.patches) {
+            assert!((p.bounds.radius - q.bounds.radius * 1e-3).abs() < 1e-12);
+            assert!((p.bounds.center - q.bounds.center * 1e-3).length() < 1e-12);
+        }
+    }
+}

@@ -5,6 +5,7 @@
 
 pub mod bezier;
 pub mod memory;
+pub mod merge;
 pub mod mesh;
 pub mod poles;
 pub mod select;
@@ -37,7 +38,7 @@ fn box_of(points: impl IntoIterator<Item = DVec3>) -> Option<(DVec3, DVec3)> {
 }
 
 impl Sphere {
-    const EMPTY: Sphere = Sphere {
+    pub(crate) const EMPTY: Sphere = Sphere {
         center: DVec3::ZERO,
         radius: 0.0,
     };

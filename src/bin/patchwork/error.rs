@@ -107,6 +107,8 @@ pub enum CliError {
     BadFormat(String),
     #[error("{reason}")]
     Stdin { reason: String },
+    #[error(transparent)]
+    Merge(#[from] patchwork::model::merge::MergeError),
     #[error("{failed} of {total} files failed (each error above)")]
     FilesFailed { failed: usize, total: usize },
     #[error("bench --flythrough takes one model file, got {0}")]

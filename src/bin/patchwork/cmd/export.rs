@@ -12,15 +12,17 @@ use patchwork::io::stl_out::write_stl;
 use patchwork::model::{Scene, UpAxis};
 use patchwork::view;
 
-use super::load_built;
 use crate::args::pixel_error;
 use crate::error::CliError;
 use crate::out::{self, data};
+use patchwork::prep::Hierarchies;
 
 #[derive(Args, Debug)]
 pub struct ExportArgs {
-    /// Model file (.bpt, .step, .stp, .glb, .gltf, .obj, .ply, .stl).
-    file: PathBuf,
+    /// Model files (.bpt, .step, .stp, .iges, .glb, .gltf, .obj, .ply, .stl; `-` reads stdin,
+    /// with --format); several are drawn as one scene, each file a top-level part.
+    #[arg(required = true)]
+    files: Vec<PathBuf>,
     #[command(flatten)]
     cache: crate::args::CacheArgs,
     #[command(flatten)]
@@ -121,7 +123,7 @@ fn frame(
     match scene.unit.and_then(metres_per_unit) {
         Some(model) => Ok((up, model / target, asked.to_owned())),
         None if args.unit.is_some() => Err(CliError::UnitUnknown {
-            path: args.file.clone(),
+            path: super::shown(&args.files),
         }),
         // The format states no unit: its numbers are written as they are.
         None => Ok((up, 1.0, "model units".to_owned())),
@@ -131,19 +133,22 @@ fn frame(
 pub fn run(args: &ExportArgs) -> Result<(), CliError> {
     let format = Format::of(&args.output)?;
     let tolerance = args.tolerance()?;
-    let scene = args
-        .parts
-        .apply(load_built(&args.file, &args.cache)?, &args.file)?;
+    let file = super::shown(&args.files);
+    let loaded = super::load_all(&args.files, &args.cache.options(Hierarchies::Build))?;
+    let scene = args.parts.apply(loaded.scene, &file)?;
     let (up, scale, unit) = frame(args, format, &scene)?;
     let opts = ExportOptions {
         tolerance,
         up,
         scale,
+        // The file's name; several files: their names joined (each a group below it).
         root_name: args
-            .file
-            .file_name()
+            .files
+            .iter()
+            .filter_map(|f| f.file_name())
             .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_default(),
+            .collect::<Vec<_>>()
+            .join(" + "),
         ..ExportOptions::default()
     };
     let doc = assemble(&scene, &opts)?;

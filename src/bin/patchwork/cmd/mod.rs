@@ -136,6 +136,42 @@ fn load_file(path: &Path, shown: &Path, options: &LoadOptions) -> Result<Loaded,
     Ok(loaded)
 }
 
+/// Loads `files` as [`load`] does; several are merged into one scene ([`patchwork::model::
+/// merge`]: each file a top-level part named after it, as written, in one unit; what was
+/// converted is said on stderr) without pending hierarchies (drawn from the cache or at full
+/// resolution).
+pub fn load_all(files: &[PathBuf], options: &LoadOptions) -> Result<Loaded, CliError> {
+    if let [file] = files {
+        return load(file, options);
+    }
+    let mut named = Vec::with_capacity(files.len());
+    for file in files {
+        let name = file.file_name().map_or_else(
+            || file.display().to_string(),
+            |n| n.to_string_lossy().into_owned(),
+        );
+        named.push(patchwork::model::merge::Named {
+            name,
+            scene: load(file, options)?.scene,
+        });
+    }
+    let merged = patchwork::model::merge::merge(named)?;
+    for n in &merged.notes {
+        note!("note: {n}");
+    }
+    Ok(Loaded {
+        scene: merged.scene,
+        pending: None,
+        warnings: Vec::new(),
+    })
+}
+
+/// The files as one name for messages (`a.step + b.glb`).
+pub fn shown(files: &[PathBuf]) -> PathBuf {
+    let names: Vec<String> = files.iter().map(|f| f.display().to_string()).collect();
+    PathBuf::from(names.join(" + "))
+}
+
 /// Loads a model with every hierarchy built (or read from the cache `cache` names).
 pub fn load_built(path: &Path, cache: &CacheArgs) -> Result<Scene, CliError> {
     Ok(load(path, &cache.options(Hierarchies::Build))?.scene)

@@ -12,15 +12,17 @@ use patchwork::io::png;
 use patchwork::render::{Primitives, RenderOptions, Renderer};
 use patchwork::tessellate::{MeshStats, tessellate_scene};
 
-use super::{load, report_failures};
+use super::report_failures;
 use crate::args::{CameraArgs, DrawArgs};
 use crate::error::CliError;
 use crate::out::{self, data, note};
 
 #[derive(Args, Debug)]
 pub struct RenderArgs {
-    /// Model file (.bpt, .step, .stp, .glb, .gltf, .obj, .ply, .stl).
-    file: PathBuf,
+    /// Model files (.bpt, .step, .stp, .iges, .glb, .gltf, .obj, .ply, .stl; `-` reads stdin,
+    /// with --format); several are drawn as one scene, each file a top-level part.
+    #[arg(required = true)]
+    files: Vec<PathBuf>,
     #[command(flatten)]
     cache: crate::args::CacheArgs,
     #[command(flatten)]
@@ -59,8 +61,9 @@ pub fn run(args: &RenderArgs) -> Result<bool, CliError> {
     // A mesh is drawn from its cached hierarchies, or else at full resolution (error 0):
     // building them would take longer than the image (`stats`, `check`, `bench` and `view`
     // fill the cache).
-    let loaded = load(
-        &args.file,
+    let file = &super::shown(&args.files);
+    let loaded = super::load_all(
+        &args.files,
         &args
             .cache
             .options(patchwork::prep::Hierarchies::CachedOrOriginal),
@@ -68,10 +71,10 @@ pub fn run(args: &RenderArgs) -> Result<bool, CliError> {
     if loaded.pending.is_some() {
         note!(
             "{}: no cached hierarchies: drawn at full resolution",
-            args.file.display()
+            file.display()
         );
     }
-    let scene = args.parts.apply(loaded.scene, &args.file)?;
+    let scene = args.parts.apply(loaded.scene, file)?;
     let camera = args.camera.validate()?;
     let view = camera.view(&scene)?;
     let t0 = Instant::now();

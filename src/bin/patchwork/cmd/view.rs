@@ -7,7 +7,6 @@ use clap::Args;
 use patchwork::anim::GroupBy;
 use patchwork::viewer::{ViewerAnimation, ViewerOptions, script_key};
 
-use super::load;
 use crate::args::{BudgetArgs, CameraArgs, PrimitivesArg, at_least, distance, lod_options};
 use crate::error::CliError;
 use crate::out::note;
@@ -15,8 +14,10 @@ use crate::out::note;
 #[derive(Args, Debug)]
 #[command(after_help = patchwork::viewer::CONTROLS)]
 pub struct ViewArgs {
-    /// Model file (.bpt, .step, .stp, .glb, .gltf, .obj, .ply, .stl).
-    file: PathBuf,
+    /// Model files (.bpt, .step, .stp, .iges, .glb, .gltf, .obj, .ply, .stl; `-` reads stdin,
+    /// with --format); several are drawn as one scene, each file a top-level part.
+    #[arg(required = true)]
+    files: Vec<PathBuf>,
     #[command(flatten)]
     cache: crate::args::CacheArgs,
     #[command(flatten)]
@@ -74,17 +75,19 @@ pub fn run(args: &ViewArgs) -> Result<(), CliError> {
     }
     // A mesh shows at once at full resolution (or from the cached hierarchies); its
     // hierarchies are built on a background thread, written to the cache, and the viewer
-    // swaps in the scene that has them.
-    let loaded = load(
-        &args.file,
-        &args
-            .cache
-            .options(patchwork::prep::Hierarchies::CachedOrOriginal),
-    )?;
-    let scene = args.parts.apply(loaded.scene, &args.file)?;
+    // swaps in the scene that has them. Several files are merged with their hierarchies
+    // built first.
+    let file = super::shown(&args.files);
+    let hierarchies = if args.files.len() > 1 {
+        patchwork::prep::Hierarchies::Build
+    } else {
+        patchwork::prep::Hierarchies::CachedOrOriginal
+    };
+    let loaded = super::load_all(&args.files, &args.cache.options(hierarchies))?;
+    let scene = args.parts.apply(loaded.scene, &file)?;
     let upgrade = loaded.pending.map(|pending| {
         let (tx, rx) = std::sync::mpsc::channel();
-        let (start, file) = (scene.clone(), args.file.clone());
+        let (start, file) = (scene.clone(), file.clone());
         std::thread::spawn(move || {
             let t = std::time::Instant::now();
             let built = pending.build(&start, &patchwork::prep::NoProgress);
@@ -101,7 +104,7 @@ pub fn run(args: &ViewArgs) -> Result<(), CliError> {
         });
         rx
     });
-    let title = args.file.file_name().map_or_else(
+    let title = file.file_name().map_or_else(
         || "patchwork".into(),
         |n| format!("patchwork — {}", n.to_string_lossy()),
     );
