@@ -9,7 +9,7 @@ use glam::DVec3;
 
 use serde_json::{Value, json};
 
-use patchwork::check::fidelity::{FaceFidelity, measure_meshes};
+use patchwork::check::fidelity::{FaceFidelity, measure_meshes_with};
 use patchwork::model::{Scene, UpAxis, bounding_box};
 use patchwork::tessellate::{MeshStats, PatchMesh, tessellate_scene};
 use patchwork::view::View;
@@ -47,7 +47,7 @@ pub fn run(args: &StatsArgs) -> Result<(), CliError> {
     let meshes = tessellate_scene(&scene, &view, camera.pixel_error);
     let dt = t0.elapsed();
     let s = MeshStats::of(&meshes);
-    let faces = measure_meshes(&scene, &meshes);
+    let faces = measure_meshes_with(&scene, &meshes, &super::Bar::default());
     if out::json() {
         out::emit(&json_report(
             args, &scene, &view, &camera, &s, &faces, &meshes, load_ms, dt,
