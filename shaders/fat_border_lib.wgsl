@@ -18,6 +18,10 @@ const FB_TINY: f32 = 1e-12;
 // point ε·normalize(t × d)/cos(θ/2): the band stays at least ε wide and the joint fans have
 // zero area (their triangles are not drawn).
 const FB_STRAIGHT: u32 = 8u;
+// Bits 4..9 of a slot code (and of a border point's info): the fat border's half-width across
+// the view as q / 63 of ε, q = 0 meaning ε (`render::fat_border::width_bits`).
+const FB_WIDTH_SHIFT: u32 = 4u;
+const FB_WIDTH_MASK: u32 = 1008u;
 
 // `v` normalised, or `fallback` when `v` is (nearly) zero.
 fn fb_normalize_or(v: vec3<f32>, fallback: vec3<f32>) -> vec3<f32> {
@@ -54,6 +58,12 @@ fn fat_border_position(
     code: u32,
 ) -> vec3<f32> {
     let slot = code & 7u;
+    // Half-width across the view: q / 63 of ε from bits 4..9 (q = 0: ε); push-back ε.
+    let q = (code & FB_WIDTH_MASK) >> FB_WIDTH_SHIFT;
+    var width = eps;
+    if (q != 0u) {
+        width = eps * f32(q) / 63.0;
+    }
     let d = fb_normalize_or(viewer.xyz - cur * viewer.w, vec3<f32>(0.0, 0.0, 1.0));
     let s_next0 = next - cur;
     let s_prev0 = cur - prev;
@@ -81,15 +91,15 @@ fn fat_border_position(
             default: { off = vec3<f32>(0.0, 0.0, 0.0); }
         }
     }
-    return cur + eps * off - eps * d;
+    return cur + width * off - eps * d;
 }
 
 // ---- Vertex pulling: the displaced vertices expanded from border points ----
 //
 // Every border vertex is stored once, ring after ring, as a `render::fat_border::BorderPoint`
 // of FB_POINT_WORDS 32-bit words: cur (3 × f32), ε, normal (3 × f32), info, patch id, packed
-// colour. info: FB_INFO_STRAIGHT | FB_INFO_FIRST | FB_INFO_LAST | FB_INFO_CLOSING | (ring
-// length - 1) << FB_RING_SHIFT. Each ring is followed by a closing point, a copy of its
+// colour. info: FB_INFO_STRAIGHT | FB_INFO_FIRST | FB_INFO_LAST | FB_INFO_CLOSING | half-width
+// (FB_WIDTH_MASK) | (ring length - 1) << FB_RING_SHIFT. Each ring is followed by a closing point, a copy of its
 // first point. Vertex i of a draw is slot (i mod 8) of point (i div 8); the triangles come
 // from an index pattern that depends only on the point's position (`render::fat_border::
 // pattern`), so a ring's last segment reaches its closing point, whose slots 3 and 6 are
@@ -102,7 +112,7 @@ const FB_INFO_STRAIGHT: u32 = 1u;
 const FB_INFO_FIRST: u32 = 2u;
 const FB_INFO_LAST: u32 = 4u;
 const FB_INFO_CLOSING: u32 = 8u;
-const FB_RING_SHIFT: u32 = 4u;
+const FB_RING_SHIFT: u32 = 10u;
 
 @group(1) @binding(0) var<storage, read> fb_points: array<u32>;
 
@@ -192,6 +202,7 @@ fn fat_border_vertex(i: u32, len: u32, viewer: vec4<f32>) -> vec4<f32> {
     }
     let prev = fb_cur(fb_neighbour(p, false));
     let next = fb_cur(fb_neighbour(p, true));
-    let pos = fat_border_position(prev, fb_cur(p), next, viewer, fb_word_f(p, 3u), r.y | flag);
+    let code = r.y | flag | (fb_info(p) & FB_WIDTH_MASK);
+    let pos = fat_border_position(prev, fb_cur(p), next, viewer, fb_word_f(p, 3u), code);
     return vec4<f32>(pos, bitcast<f32>(p));
 }

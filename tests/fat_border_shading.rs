@@ -11,7 +11,7 @@ use patchwork::check::golden::border_shading;
 /// Largest mean fin contrast accepted (largest RGB channel difference, 0–1).
 const FIN_CONTRAST: f32 = 0.18;
 /// Largest ratio of FLIP with fat borders to FLIP without, away from contours.
-const INTERIOR_RATIO: f32 = 1.4;
+const INTERIOR_RATIO: f32 = 1.1;
 
 /// Fat borders shaded as the surface they extend, at γ = 1, 2, 4, 8 px against the watertight
 /// reference:
@@ -19,10 +19,12 @@ const INTERIOR_RATIO: f32 = 1.4;
 ///   largest channel difference from the nearest reference pixel ≤ [`FIN_CONTRAST`]
 ///   (measured 0.06–0.16; 0.21–0.24 before fat-border fragments chose their lit side by their
 ///   lateral offset — the dark fins);
-/// * the silhouette grows by at most ⌈γ⌉ + 1 px (γ, plus one for rasterization rounding);
+/// * the silhouette grows by at most ⌈γ / 2⌉ + 1 px: fat borders are as wide as their patch's
+///   measured border error (`PatchMesh::border_width`), which on the teapot stays under half of
+///   ε (measured growth 1–3 px at γ = 1–8; 1, 2, 4, 8 px when every fat border was ε wide);
 /// * away from contours (outside the ⌈γ⌉ + 1 px band) the image with fat borders costs at most
-///   [`INTERIOR_RATIO`] × the FLIP of the cracks they hide. Measured 1.05–1.30 ×: not yet
-///   "no worse" (see the report of issue 17 item 8).
+///   [`INTERIOR_RATIO`] × the FLIP of the cracks they hide: no worse, up to rasterization.
+///   Measured 0.97–1.03 ×; 1.05–1.35 × with fat borders ε wide, which this test fails.
 #[test]
 fn fat_borders_are_no_worse_than_the_cracks_they_hide() {
     let scene = common::teapot();
@@ -58,7 +60,7 @@ fn fat_borders_are_no_worse_than_the_cracks_they_hide() {
                     m.interior_on, m.interior_off
                 ));
             }
-            if m.growth_on_px as f64 > gamma.ceil() + 1.0 {
+            if m.growth_on_px as f64 > (gamma / 2.0).ceil() + 1.0 {
                 bad.push(format!("view {k} γ {gamma}: growth {} px", m.growth_on_px));
             }
             if m.fin_contrast > FIN_CONTRAST {

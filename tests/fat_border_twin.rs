@@ -8,7 +8,8 @@ mod common;
 use glam::{Vec3, Vec4};
 use patchwork::check::crack::SplitMix64;
 use patchwork::render::fat_border::{
-    INFO_CLOSING, INFO_STRAIGHT, SLOTS_PER_POINT, STRAIGHT_FLAG, expand, is_straight, position,
+    INFO_CLOSING, INFO_STRAIGHT, SLOTS_PER_POINT, STRAIGHT_FLAG, WIDTH_MASK, WIDTH_SHIFT, expand,
+    is_straight, position,
 };
 use patchwork::render::shaders::FAT_BORDER_TWIN;
 use patchwork::render::{BorderGeometry, FatBorders};
@@ -37,11 +38,13 @@ fn inputs() -> Vec<(Vec3, Vec3, Vec3, Vec4, f32, u32)> {
         // An orthographic viewer: the direction towards it, at infinity.
         let towards = Vec3::new(r(1.0), r(1.0), r(1.0)).normalize_or(Vec3::Z);
         let eps = (r(0.05)).abs() + 1e-4;
+        // Full width, or a narrower half-width across the view (bits 4..9).
+        let width = [0, 1, 17, 62][(out.len() / 28) % 4] << WIDTH_SHIFT;
         for viewer in [eye.extend(1.0), towards.extend(0.0)] {
             for slot in 0..=6 {
                 // Both branches of the shader, whatever the joint.
-                out.push((prev, cur, next, viewer, eps, slot));
-                out.push((prev, cur, next, viewer, eps, slot | STRAIGHT_FLAG));
+                out.push((prev, cur, next, viewer, eps, slot | width));
+                out.push((prev, cur, next, viewer, eps, slot | STRAIGHT_FLAG | width));
             }
         }
     }
@@ -238,6 +241,8 @@ fn ring_meshes() -> Vec<PatchMesh> {
                 positions,
                 borders,
                 eps_target: 0.001 + (r(0.02)).abs() as f64,
+                // Some patches with fat borders narrower than ε across the view.
+                border_error: (id % 3 == 1).then_some(0.0004),
                 color: (id % 2 == 0).then_some([0.2, 0.5, 0.9]),
                 ..PatchMesh::default()
             }
@@ -267,6 +272,8 @@ fn pulled_vertices_match_the_cpu_twin() {
         straight > 10 && straight < g.points.len() - 10,
         "{straight}"
     );
+    let narrow = g.points.iter().filter(|p| p.info & WIDTH_MASK != 0).count();
+    assert!(narrow > 10 && narrow < g.points.len() - 10, "{narrow}");
     let points = gpu
         .device
         .create_buffer_init(&wgpu::util::BufferInitDescriptor {

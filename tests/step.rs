@@ -692,3 +692,42 @@ fn a_loop_of_unclamped_bsplines_bounds_its_face() {
     // Outer loop ≈ 0.92 × 1.0 rounded rectangle, inner ≈ 0.66 × 0.78: a ring of ~0.35 mm².
     assert!((0.2..0.6).contains(&area), "area {area}");
 }
+
+/// A cylinder whose bottom circle is three arcs, one of them 7.8e-9 mm long between two
+/// distinct vertices (KiCad's OCCT export, face #3503 of kicad-demo-video): the tiny arc is a
+/// chord of that length, not a whole circle. Read as a whole circle (both vertices located at
+/// one parameter, taken for a closed edge) the face's loop ran around twice and its mesh was a
+/// fixed 0.93 mm off the cylinder at every tolerance (error/ε 2.8 at 0.33 mm, 20 at 0.033 mm).
+#[test]
+fn a_tiny_arc_between_two_vertices_is_not_a_whole_circle() {
+    use patchwork::check::fidelity::measure_meshes;
+    let path = common::root().join("tests/data/step/tiny_arc_cylinder.step");
+    let scene = load(&path).expect("loads");
+    assert!(scene.skipped.is_empty(), "{:?}", scene.skipped);
+    assert_eq!(scene.patches.len(), 1);
+    for tol in [0.33, 0.1, 0.02] {
+        let meshes = tessellate_scene_tolerance(&scene, tol);
+        let m = &meshes[0];
+        assert!(m.failure.is_none(), "{:?}", m.failure);
+        // The independent measure (dense samples against the trimmed face, both ways).
+        let faces = measure_meshes(&scene, &meshes);
+        let (_, f) = faces.first().expect("one trimmed face");
+        assert!(
+            f.ratio() <= 1.6,
+            "tol {tol}: error/tol {} (outside {}, missing {})",
+            f.ratio(),
+            f.outside,
+            f.missing
+        );
+        // Radius 1.5, height 2.8: lateral area 26.39 mm², each point covered once.
+        let area: f64 = m
+            .triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| m.positions[i as usize].as_dvec3());
+                (b - a).cross(c - a).length() / 2.0
+            })
+            .sum();
+        assert!((25.0..26.5).contains(&area), "tol {tol}: area {area}");
+    }
+}

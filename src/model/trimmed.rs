@@ -41,11 +41,23 @@ pub struct TrimEdge {
 
 impl TrimEdge {
     /// Builds an edge from a curve and its end vertices, finding the parameter range that runs
-    /// from `start` to `end`. `None` when the vertices are not on the curve (within `tol`) or
-    /// the curve is not finite there.
-    pub fn new(id: u64, curve: Curve3D, start: DVec3, end: DVec3, tol: f64) -> Option<TrimEdge> {
+    /// from `start` to `end`. `closed`: the edge starts and ends at one vertex, so on a
+    /// periodic curve it runs once around. `None` when the vertices are not on the curve
+    /// (within `tol`) or the curve is not finite there.
+    pub fn new(
+        id: u64,
+        curve: Curve3D,
+        start: DVec3,
+        end: DVec3,
+        closed: bool,
+        tol: f64,
+    ) -> Option<TrimEdge> {
         let range = curve_range(&curve).filter(|(a, b)| a.is_finite() && b.is_finite());
-        let ends = range.map(|(a, b)| (a, b, to_dvec(curve.subs(a)), to_dvec(curve.subs(b))));
+        // On a periodic curve both ends of the range are one point: an open edge is located,
+        // never taken for the whole range (a tiny arc at the seam is not a whole circle).
+        let ends = range
+            .filter(|_| closed || curve.period().is_none())
+            .map(|(a, b)| (a, b, to_dvec(curve.subs(a)), to_dvec(curve.subs(b))));
         let (t0, t1) = match ends {
             Some((a, b, pa, pb)) if pa.distance(start) <= tol && pb.distance(end) <= tol => (a, b),
             Some((a, b, pa, pb)) if pb.distance(start) <= tol && pa.distance(end) <= tol => (b, a),
@@ -55,8 +67,10 @@ impl TrimEdge {
                 let s = locate(&curve, start, range, tol)?;
                 let e = locate(&curve, end, range, tol)?;
                 match curve.period() {
-                    // A closed edge on a periodic curve runs once around.
-                    Some(p) if (s - e).abs() < 1e-12 => (s, s + p),
+                    // A closed edge on a periodic curve runs once around; an open one whose
+                    // vertices are located at one parameter (a tiny edge, its vertices closer
+                    // than the search resolves) is that short chord, not a whole period.
+                    Some(p) if closed && (s - e).abs() < 1e-12 => (s, s + p),
                     _ => (s, e),
                 }
             }
@@ -80,7 +94,7 @@ impl TrimEdge {
         to_dvec(self.curve.subs(t))
     }
 
-    /// Whether the edge starts and ends at the same vertex.
+    /// Whether the edge starts and ends at the same point.
     pub fn is_closed(&self) -> bool {
         self.start == self.end
     }

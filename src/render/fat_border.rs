@@ -20,6 +20,12 @@
 //! decision is made once, on the CPU ([`is_straight`]), and passed to the shader as a flag in
 //! the border point, so both twins agree by construction.
 //!
+//! **Width.** The push-back along d_i is ε, the patch's error; the displacement across the
+//! view is the patch's [`PatchMesh::border_width`] (its measured border error when known,
+//! at least ¼ ε): the crack lies between the neighbours' border polylines, so each needs
+//! only its own border's error, and fins stick that much less out of silhouettes. It rides in
+//! the code's [`WIDTH_MASK`] bits ([`width_bits`]).
+//!
 //! [`expand`] mirrors `fat_border_position` in `shaders/fat_border_lib.wgsl` operation by
 //! operation, in f32, and [`resolve`] / [`position`] mirror the vertex pulling
 //! (`fb_resolve`, `fat_border_vertex`); `tests/fat_border_twin.rs` runs the WGSL functions in
@@ -177,14 +183,36 @@ pub fn is_straight(prev: Vec3, cur: Vec3, next: Vec3) -> bool {
     s_prev.dot(s_next) > STRAIGHT_COS
 }
 
+/// The half-width across the view of a point whose code carries `code & WIDTH_MASK`: `eps`
+/// scaled by the 6-bit fraction q / 63, where q = 0 means the full ε (see
+/// [`PatchMesh::border_width`]).
+fn width_of(eps: f32, code: u32) -> f32 {
+    let q = (code & WIDTH_MASK) >> WIDTH_SHIFT;
+    if q == 0 { eps } else { eps * q as f32 / 63.0 }
+}
+
+/// The width field of a code or [`BorderPoint::info`] for a half-width `width` ≤ `eps`:
+/// rounded up to the next 63rd of ε (never narrower than measured), 0 (full) at ε.
+pub fn width_bits(width: f64, eps: f64) -> u32 {
+    let narrower = width.is_finite() && eps > 0.0 && width < eps;
+    if !narrower {
+        return 0;
+    }
+    let q = ((width / eps) * 63.0).ceil().clamp(1.0, 63.0) as u32;
+    if q >= 63 { 0 } else { q << WIDTH_SHIFT }
+}
+
 /// CPU twin of `fat_border_position` (WGSL). `code` = slot (0 = v_i pushed back, 1..6 = eq.
-/// (1)–(6)) plus [`STRAIGHT_FLAG`] for a straight joint. `viewer` is the viewer in
+/// (1)–(6)) plus [`STRAIGHT_FLAG`] for a straight joint plus the half-width across the view
+/// as a fraction of ε in [`WIDTH_MASK`] ([`width_bits`]; 0 = ε; the push-back along the view is
+/// always ε). `viewer` is the viewer in
 /// homogeneous coordinates ([`crate::view::View::viewer`]): `(eye, 1)` under perspective, the
 /// point at infinity `(−forward, 0)` under an orthographic projection; the view direction
 /// d_i = normalize(viewer.xyz − v_i · viewer.w) is then the same at every border vertex, so
 /// the push-back runs along the rays and leaves every vertex where it projects.
 pub fn expand(prev: Vec3, cur: Vec3, next: Vec3, viewer: Vec4, eps: f32, code: u32) -> Vec3 {
     let slot = code & 7;
+    let width = width_of(eps, code);
     let d = normalize_or(viewer.truncate() - cur * viewer.w, Vec3::Z);
     let (s_prev, s_next) = segment_dirs(prev, cur, next);
     let sum = s_prev + s_next;
@@ -208,19 +236,28 @@ pub fn expand(prev: Vec3, cur: Vec3, next: Vec3, viewer: Vec4, eps: f32, code: u
             _ => Vec3::ZERO,
         }
     };
-    cur + eps * off - eps * d
+    cur + width * off - eps * d
 }
 
 /// Bits of [`BorderPoint::info`]: the joint is straight ([`is_straight`]: its slots 1-3 and
 /// 4-6 sit at the mitre points, so its fans have zero area), the point opens its ring,
 /// closes its ring, is the ring's closing point (a copy of its first point, see
-/// [`BorderGeometry`]); the ring's length − 1 above [`RING_SHIFT`] (the neighbours of a
-/// ring's ends wrap around).
+/// [`BorderGeometry`]); the half-width in [`WIDTH_MASK`]; the ring's length − 1 above
+/// [`RING_SHIFT`] (the neighbours of a ring's ends wrap around).
 pub const INFO_STRAIGHT: u32 = 1;
 pub const INFO_FIRST: u32 = 2;
 pub const INFO_LAST: u32 = 4;
 pub const INFO_CLOSING: u32 = 8;
-pub const RING_SHIFT: u32 = 4;
+/// Bits 4..9 of [`BorderPoint::info`] and of an [`expand`] code: the fat border's half-width
+/// across the view as q / 63 of ε (q = 0: ε), see [`width_bits`].
+pub const WIDTH_SHIFT: u32 = 4;
+pub const WIDTH_MASK: u32 = 63 << WIDTH_SHIFT;
+/// The ring's length − 1 sits above this bit: rings of up to 2²² points (a ring that long
+/// holds 160 MiB of points, more than a storage binding: `RenderError::TooLarge` first).
+pub const RING_SHIFT: u32 = 10;
+/// Longest ring a [`BorderPoint`] can name (its length − 1 fills the bits above
+/// [`RING_SHIFT`]); a longer one is refused by the renderer as too large.
+pub const MAX_RING_POINTS: usize = 1 << (32 - RING_SHIFT);
 
 /// One border vertex v_i as the GPU stores it (40 bytes, read from a storage buffer by
 /// `vs_border`): its position, its patch's ε, its normal, where it sits on its ring, and
@@ -232,8 +269,8 @@ pub struct BorderPoint {
     pub cur: [f32; 3],
     pub eps: f32,
     pub normal: [f32; 3],
-    /// [`INFO_STRAIGHT`] | [`INFO_FIRST`] | [`INFO_LAST`] | [`INFO_CLOSING`] | (ring length
-    /// − 1) << [`RING_SHIFT`].
+    /// [`INFO_STRAIGHT`] | [`INFO_FIRST`] | [`INFO_LAST`] | [`INFO_CLOSING`] | half-width
+    /// ([`WIDTH_MASK`]) | (ring length − 1) << [`RING_SHIFT`].
     pub info: u32,
     pub patch_id: u32,
     /// The patch colour, packed (see `PatchMesh::color`).
@@ -335,7 +372,14 @@ pub fn position(
     let at = |k: usize| Vec3::from(point(points, k).cur);
     let (prev, next) = (neighbour(points, p, false), neighbour(points, p, true));
     (
-        expand(at(prev), at(p), at(next), viewer, q.eps, slot | flag),
+        expand(
+            at(prev),
+            at(p),
+            at(next),
+            viewer,
+            q.eps,
+            slot | flag | (q.info & WIDTH_MASK),
+        ),
         p,
     )
 }
@@ -352,11 +396,13 @@ pub fn position(
 #[derive(Clone, Debug, Default)]
 pub struct BorderGeometry {
     pub points: Vec<BorderPoint>,
+    /// Points of the longest ring appended (≤ [`MAX_RING_POINTS`] to be drawable).
+    pub longest_ring: usize,
 }
 
 impl BorderGeometry {
     /// The fat borders of every closed border loop of `meshes`, ε = each patch's
-    /// [`PatchMesh::eps_border`].
+    /// [`PatchMesh::eps_border`], half-width across the view its [`PatchMesh::border_width`].
     pub fn of<'a>(meshes: impl IntoIterator<Item = &'a PatchMesh>) -> BorderGeometry {
         let mut g = BorderGeometry::default();
         for m in meshes {
@@ -378,11 +424,13 @@ impl BorderGeometry {
     /// Appends the border points of `m`.
     pub fn append(&mut self, m: &PatchMesh) {
         let eps = m.eps_border() as f32;
+        let width = width_bits(m.border_width(), m.eps_border());
         let color = super::upload::packed_color(m.color);
         self.points.reserve(Self::points_of(m));
         for ring in m.borders.iter().filter(|r| !r.is_empty()) {
             let n = ring.len();
-            let span = (n as u32 - 1) << RING_SHIFT;
+            self.longest_ring = self.longest_ring.max(n);
+            let span = ((n as u32 - 1) << RING_SHIFT) | width;
             let first = self.points.len();
             for k in 0..n {
                 let at = |o: usize| m.positions[ring[(k + o) % n] as usize];
@@ -435,6 +483,33 @@ impl BorderGeometry {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn narrower_width_moves_across_the_view_only() {
+        let (prev, cur, next) = (
+            Vec3::new(-1.0, 0.2, 0.0),
+            Vec3::ZERO,
+            Vec3::new(1.0, 0.1, 0.0),
+        );
+        let eye = Vec3::new(0.3, -0.4, 5.0);
+        let d = (eye - cur).normalize();
+        let eps = 0.01;
+        for width in [0.0025f64, 0.004, 0.0098] {
+            let bits = width_bits(width, eps as f64);
+            assert_ne!(bits, 0, "{width}");
+            for slot in 1..=6u32 {
+                let p = expand(prev, cur, next, eye.extend(1.0), eps, slot | bits);
+                let off = p - cur + eps * d;
+                let w = off.length() as f64;
+                // Rounded up to the next 63rd of ε: never narrower, at most ε / 63 wider.
+                assert!(w >= width * (1.0 - 1e-5) && w <= width + eps as f64 / 63.0 + 1e-7);
+                assert!(off.dot(d).abs() < 1e-6, "slot {slot}: not across the view");
+            }
+        }
+        assert_eq!(width_bits(0.01, 0.01), 0);
+        assert_eq!(width_bits(f64::NAN, 0.01), 0);
+        assert_eq!(width_bits(0.005, 0.0), 0);
+    }
 
     #[test]
     fn displaced_vertices_are_eps_away_and_pushed_back() {
@@ -629,12 +704,13 @@ mod tests {
         let mut out = Vec::new();
         for m in meshes {
             let eps = m.eps_border() as f32;
+            let width = width_bits(m.border_width(), m.eps_border());
             for ring in &m.borders {
                 let n = ring.len();
                 let at = |k: usize| m.positions[ring[k % n] as usize];
                 let flat = |k: usize| is_straight(at(k + n - 1), at(k), at(k + 1));
                 let point = |k: usize, slot: u32| {
-                    let flag = if flat(k) { STRAIGHT_FLAG } else { 0 };
+                    let flag = width | if flat(k) { STRAIGHT_FLAG } else { 0 };
                     expand(
                         at(k + n - 1),
                         at(k),

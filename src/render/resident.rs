@@ -474,6 +474,17 @@ impl ResidentGeometry {
         stats: &mut UploadStats,
     ) -> Result<(), RenderError> {
         let gpu = &renderer.gpu;
+        if let Some(b) = built
+            .iter()
+            .find(|b| b.borders.longest_ring > super::fat_border::MAX_RING_POINTS)
+        {
+            let unit = std::mem::size_of::<super::fat_border::BorderPoint>() as u64;
+            return Err(RenderError::TooLarge {
+                what: "fat-border points of one border loop",
+                bytes: b.borders.longest_ring as u64 * unit,
+                limit: super::fat_border::MAX_RING_POINTS as u64 * unit,
+            });
+        }
         for b in &built {
             let slot = &mut self.slots[b.slot];
             for (p, range) in slot.ranges.iter_mut().enumerate() {

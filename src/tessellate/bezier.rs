@@ -165,7 +165,37 @@ impl BezierTessellator {
         if ring.len() >= 2 {
             out.borders.push(ring);
         }
+        out.border_error = Some(border_error(patch, nu, nv, &out.positions));
     }
+}
+
+/// Largest distance between the boundary curves of `patch` and the border polyline of its
+/// `nu × nv` grid (`positions`, row-major in u, as the GPU gets them), sampled at a quarter,
+/// half and three quarters of every border segment: the width a fat border must have
+/// (`PatchMesh::border_width`). A segment of a smooth curve deviates most near its middle.
+fn border_error(patch: &BezierPatch, nu: u32, nv: u32, positions: &[glam::Vec3]) -> f64 {
+    let cv = nv as usize + 1;
+    let at = |i: usize, j: usize| positions[i * cv + j].as_dvec3();
+    let (fu, fv) = (nu as f64, nv as f64);
+    let mut worst: f64 = 0.0;
+    let mut segment = |(i0, j0): (usize, usize), (i1, j1): (usize, usize)| {
+        let (p0, p1) = (at(i0, j0), at(i1, j1));
+        for t in [0.25, 0.5, 0.75] {
+            let u = (i0 as f64 + t * (i1 as f64 - i0 as f64)) / fu;
+            let v = (j0 as f64 + t * (j1 as f64 - j0 as f64)) / fv;
+            worst = worst.max(patch.eval(u, v).distance(p0.lerp(p1, t)));
+        }
+    };
+    let (nu, nv) = (nu as usize, nv as usize);
+    for j in 0..nv {
+        segment((0, j), (0, j + 1));
+        segment((nu, j), (nu, j + 1));
+    }
+    for i in 0..nu {
+        segment((i, 0), (i + 1, 0));
+        segment((i, nv), (i + 1, nv));
+    }
+    worst
 }
 
 /// A triangle: vertex indices, parameters and (f32-rounded) positions of its corners.
@@ -289,5 +319,66 @@ mod tests {
             m.positions[0].as_dvec3(),
             patch.eval(0.0, 0.0).as_vec3().as_dvec3()
         );
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(48))]
+        /// The border error is what the border polyline really is off its boundary curves:
+        /// 32 samples per segment stay within it (up to the 3-sample measurement's
+        /// shortfall on curves that are not quadratic, a few per cent) and it is below ε.
+        #[test]
+        fn border_error_bounds_the_dense_border_deviation(
+            du in 1usize..=5, dv in 1usize..=5,
+            coords in proptest::collection::vec(-2.0f64..2.0, 48),
+            eps in 0.005f64..0.2,
+        ) {
+            let Some(patch) = patch_from(du, dv, &coords) else { return Ok(()); };
+            let mut m = PatchMesh::default();
+            BezierTessellator::new().tessellate(&patch, eps, &mut m);
+            prop_assume!(m.resolution.nu < MAX_SEGMENTS && m.resolution.nv < MAX_SEGMENTS);
+            let b = m.border_error.expect("Bézier patches measure their border");
+            prop_assert!(b <= eps * (1.0 + 1e-4) + 1e-5, "border {} > eps {}", b, eps);
+            let (nu, nv) = (m.resolution.nu as usize, m.resolution.nv as usize);
+            let at = |i: usize, j: usize| m.positions[i * (nv + 1) + j].as_dvec3();
+            let mut dense: f64 = 0.0;
+            let mut seg = |a: (usize, usize), c: (usize, usize)| {
+                for k in 1..32 {
+                    let t = k as f64 / 32.0;
+                    let u = (a.0 as f64 + t * (c.0 as f64 - a.0 as f64)) / nu as f64;
+                    let v = (a.1 as f64 + t * (c.1 as f64 - a.1 as f64)) / nv as f64;
+                    let on = at(a.0, a.1).lerp(at(c.0, c.1), t);
+                    dense = dense.max(patch.eval(u, v).distance(on));
+                }
+            };
+            for j in 0..nv {
+                seg((0, j), (0, j + 1));
+                seg((nu, j), (nu, j + 1));
+            }
+            for i in 0..nu {
+                seg((i, 0), (i + 1, 0));
+                seg((i, nv), (i + 1, nv));
+            }
+            prop_assert!(dense <= 1.05 * b + 1e-5, "dense border {} > measured {}", dense, b);
+        }
+    }
+
+    /// A patch whose border is straight but whose inside bulges: the border error is ~0 while
+    /// the surface error is not, so its fat borders get the floor width, not ε.
+    #[test]
+    fn straight_borders_get_thin_fat_borders() {
+        let mut ctrl = Vec::new();
+        for i in 0..3 {
+            for j in 0..3 {
+                let z = if i == 1 && j == 1 { 2.0 } else { 0.0 };
+                ctrl.push(DVec3::new(i as f64, j as f64, z));
+            }
+        }
+        let patch = BezierPatch::new(2, 2, ctrl).expect("valid");
+        let mut m = PatchMesh::default();
+        BezierTessellator::new().tessellate(&patch, 0.01, &mut m);
+        assert!(m.error > 0.002, "the inside is curved: {}", m.error);
+        assert!(m.border_error.expect("measured") < 1e-6);
+        let full = m.eps_border();
+        assert_eq!(m.border_width(), crate::tessellate::MIN_BORDER_WIDTH * full);
     }
 }

@@ -600,6 +600,7 @@ pub fn narrow_fat_borders(meshes: &mut [PatchMesh], factor: f64) {
     for m in meshes {
         m.eps_target *= factor;
         m.error *= factor;
+        m.border_error = m.border_error.map(|b| b * factor);
     }
 }
 

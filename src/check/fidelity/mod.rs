@@ -127,18 +127,36 @@ pub fn measure_meshes(
     scene: &crate::model::Scene,
     meshes: &[PatchMesh],
 ) -> Vec<(u32, FaceFidelity)> {
+    measure_meshes_with(scene, meshes, &crate::util::NoProgress)
+}
+
+/// As [`measure_meshes`], reporting each patch measured to `progress` (a large assembly
+/// takes minutes: millions of samples, each projected onto its face).
+pub fn measure_meshes_with(
+    scene: &crate::model::Scene,
+    meshes: &[PatchMesh],
+    progress: &dyn crate::util::Progress,
+) -> Vec<(u32, FaceFidelity)> {
     use rayon::prelude::*;
+    progress.begin(
+        "faces measured against their trimmed surfaces",
+        scene.patches.len(),
+    );
     let mut out: Vec<(u32, FaceFidelity)> = scene
         .patches
         .par_iter()
         .zip(meshes.par_iter())
         .filter_map(|(p, mesh)| {
             let crate::model::PatchSurface::Trimmed(face) = &p.surface else {
+                progress.advance();
                 return None;
             };
-            measure_placed(face, &p.transform, mesh, mesh.eps_target).map(|f| (p.id, f))
+            let f = measure_placed(face, &p.transform, mesh, mesh.eps_target).map(|f| (p.id, f));
+            progress.advance();
+            f
         })
         .collect();
+    progress.end();
     out.sort_by(|a, b| b.1.ratio().total_cmp(&a.1.ratio()));
     out
 }

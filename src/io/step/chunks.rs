@@ -23,12 +23,15 @@ pub fn entity_instances(text: &str) -> Result<Vec<EntityInstance>, String> {
     let chunks = chunks(text, rayon::current_num_threads() * 4);
     let parsed: Option<Vec<Vec<EntityInstance>>> = chunks
         .par_iter()
-        .map(
-            |c| match ruststep::parser::exchange::entity_instance_list(c) {
-                Ok((rest, list)) if rest.trim().is_empty() => Some(list),
+        .map(|c| {
+            // Isolated on the worker that runs it: a parser panic (ruststep overflows on some
+            // numbers) is quiet here and makes the chunk fail, and the whole-file parse below
+            // (isolated by the caller) reports it — no panic hook sees it on a rayon thread.
+            match crate::isolate::isolated(|| ruststep::parser::exchange::entity_instance_list(c)) {
+                Ok(Ok((rest, list))) if rest.trim().is_empty() => Some(list),
                 _ => None,
-            },
-        )
+            }
+        })
         .collect();
     match parsed {
         Some(lists) if !chunks.is_empty() => Ok(lists.into_iter().flatten().collect()),

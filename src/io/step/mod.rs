@@ -569,6 +569,12 @@ fn convert_edge(
         .map_err(|e| format!("edge #{id}: {e}"))?;
     let start = to_dvec(Point3::from(&ec.edge_start.vertex_geometry));
     let end = to_dvec(Point3::from(&ec.edge_end.vertex_geometry));
+    // Closed when it starts and ends at one VERTEX_POINT (as a kernel decides), or at one
+    // position: two vertices a hair apart bound a tiny edge, not a whole circle.
+    let closed = match (holder_ref(&holder.edge_start), holder_ref(&holder.edge_end)) {
+        (Some(a), Some(b)) => a == b || start == end,
+        _ => start == end,
+    };
     let size = start.length().max(end.length()).max(start.distance(end));
     let tol = EDGE_VERTEX_TOLERANCE * (1.0 + size);
     // What a kernel accepts (OCCT raises a vertex's tolerance until it covers its edges): the
@@ -599,12 +605,12 @@ fn convert_edge(
         .map_err(|e| format!("edge #{id}: curve not supported: {e}"));
     for t in [tol, loose_tol] {
         if let Some(curve) = exact.clone()
-            && let Some(e) = TrimEdge::new(id, curve, start, end, t)
+            && let Some(e) = TrimEdge::new(id, curve, start, end, closed, t)
         {
             return Ok((e, t > tol));
         }
         if let Ok(curve) = truck_curve.clone()
-            && let Some(e) = TrimEdge::new(id, curve, start, end, t)
+            && let Some(e) = TrimEdge::new(id, curve, start, end, closed, t)
         {
             return Ok((e, t > tol));
         }

@@ -207,7 +207,7 @@ pub fn progress(n: usize, what: &str) -> ProgressBar {
 /// Load progress drawn as a bar on stderr (indicatif draws nothing when stderr is not a
 /// terminal); the library reports, the binary draws.
 #[derive(Debug, Default)]
-struct Bar(std::sync::Mutex<Option<ProgressBar>>);
+pub struct Bar(std::sync::Mutex<Option<ProgressBar>>);
 
 impl patchwork::prep::Progress for Bar {
     fn begin(&self, what: &str, total: usize) {

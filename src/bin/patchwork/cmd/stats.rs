@@ -9,7 +9,7 @@ use glam::DVec3;
 
 use serde_json::{Value, json};
 
-use patchwork::check::fidelity::{FaceFidelity, measure_meshes};
+use patchwork::check::fidelity::{FaceFidelity, measure_meshes_with};
 use patchwork::model::{Scene, UpAxis, bounding_box};
 use patchwork::tessellate::{MeshStats, PatchMesh, tessellate_scene};
 use patchwork::view::{Projection, View};
@@ -55,7 +55,7 @@ fn run_one(args: &StatsArgs, file: &Path) -> Result<Value, CliError> {
     let meshes = tessellate_scene(&scene, &view, camera.pixel_error);
     let dt = t0.elapsed();
     let s = MeshStats::of(&meshes);
-    let faces = measure_meshes(&scene, &meshes);
+    let faces = measure_meshes_with(&scene, &meshes, &super::Bar::default());
     let report = json_report(
         args, file, &scene, &view, &camera, &s, &faces, &meshes, load_ms, dt,
     );
