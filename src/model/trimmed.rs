@@ -53,11 +53,12 @@ impl TrimEdge {
         tol: f64,
     ) -> Option<TrimEdge> {
         let range = curve_range(&curve).filter(|(a, b)| a.is_finite() && b.is_finite());
-        // On a periodic curve both ends of the range are one point: an open edge is located,
-        // never taken for the whole range (a tiny arc at the seam is not a whole circle).
+        // Where both ends of the range are one point (a whole circle), an open edge is
+        // located, never taken for the whole range (a tiny arc at the seam is not a whole
+        // circle); a trimmed range's ends are the edge's as before.
         let ends = range
-            .filter(|_| closed || curve.period().is_none())
-            .map(|(a, b)| (a, b, to_dvec(curve.subs(a)), to_dvec(curve.subs(b))));
+            .map(|(a, b)| (a, b, to_dvec(curve.subs(a)), to_dvec(curve.subs(b))))
+            .filter(|&(_, _, pa, pb)| closed || pa.distance(pb) > tol);
         let (t0, t1) = match ends {
             Some((a, b, pa, pb)) if pa.distance(start) <= tol && pb.distance(end) <= tol => (a, b),
             Some((a, b, pa, pb)) if pb.distance(start) <= tol && pa.distance(end) <= tol => (b, a),
