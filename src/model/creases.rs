@@ -71,26 +71,43 @@ pub fn creased_normals(positions: &[Vec3], triangles: &[[u32; 3]], crease_deg: f
             reliable(a, b, c, f)
         })
         .collect();
-    // (smaller vertex, larger vertex, its corner, the other's corner) of every edge; equal
-    // edges end up adjacent after sorting.
-    let mut edges: Vec<(u32, u32, u32, u32)> = Vec::with_capacity(3 * n);
-    for (t, tri) in triangles.iter().enumerate() {
+    // (larger vertex, its corner, the other's corner) of every edge, grouped by the smaller
+    // vertex (a counting sort: a global sort took 80 ms on the bunny), then each group
+    // sorted: equal edges end up adjacent.
+    let vertices = positions.len();
+    let mut start = vec![0u32; vertices + 1];
+    for tri in triangles {
         for k in 0..3 {
-            let (j, ca, cb) = ((k + 1) % 3, 3 * t + k, 3 * t + (k + 1) % 3);
-            let (a, b) = (tri[k], tri[j]);
-            if a < b {
-                edges.push((a, b, ca as u32, cb as u32));
-            } else {
-                edges.push((b, a, cb as u32, ca as u32));
-            }
+            start[tri[k].min(tri[(k + 1) % 3]) as usize + 1] += 1;
         }
     }
-    edges.sort_unstable();
+    for v in 0..vertices {
+        start[v + 1] += start[v];
+    }
+    let mut fill = start.clone();
+    let mut edges: Vec<(u32, u32, u32)> = vec![(0, 0, 0); 3 * n];
+    for (t, tri) in triangles.iter().enumerate() {
+        for k in 0..3 {
+            let (ca, cb) = ((3 * t + k) as u32, (3 * t + (k + 1) % 3) as u32);
+            let (a, b) = (tri[k], tri[(k + 1) % 3]);
+            let (lo, e) = if a < b {
+                (a, (b, ca, cb))
+            } else {
+                (b, (a, cb, ca))
+            };
+            edges[fill[lo as usize] as usize] = e;
+            fill[lo as usize] += 1;
+        }
+    }
+    for v in 0..vertices {
+        edges[start[v] as usize..start[v + 1] as usize].sort_unstable();
+    }
     let cos = crease_deg.to_radians().cos();
     let mut parent: Vec<u32> = (0..3 * n as u32).collect();
-    for same in edges.chunk_by(|x, y| (x.0, x.1) == (y.0, y.1)) {
+    let groups = (0..vertices).map(|v| &edges[start[v] as usize..start[v + 1] as usize]);
+    for same in groups.flat_map(|g| g.chunk_by(|x, y| x.0 == y.0)) {
         // Smooth only across a manifold edge between two trusted faces.
-        let [(_, _, a1, b1), (_, _, a2, b2)] = same else {
+        let [(_, a1, b1), (_, a2, b2)] = same else {
             continue;
         };
         let (t1, t2) = ((a1 / 3) as usize, (a2 / 3) as usize);
