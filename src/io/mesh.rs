@@ -1,8 +1,11 @@
 //! Triangle-mesh readers: glTF 2.0 (`.glb`, `.gltf`; every mesh primitive of every node in
 //! the default scene, node transforms applied; each node with a mesh a part, each primitive a
 //! group in its material's base colour) with the `gltf` crate, and Wavefront OBJ with
-//! `tobj`, PLY with `ply-rs`. The result is welded into one world-space [`TriMesh`] and split into patches
-//! ([`crate::prep::partition`]).
+//! `tobj` (each material's `Kd` a group colour), PLY with `ply-rs` (vertex or face colours as
+//! group colours). The file's normals (glTF `NORMAL`, OBJ `vn`, PLY `nx ny nz`) are kept in
+//! [`TriMesh::normals`]; where a file has none, welding computes them with creases
+//! ([`crate::model::creases`]). The result is welded into one world-space [`TriMesh`] and
+//! split into patches ([`crate::prep::partition`]). Textures are not read.
 
 use std::path::Path;
 
@@ -52,15 +55,28 @@ pub fn check_drawable(path: &Path, mesh: &TriMesh) -> Result<(), LoadError> {
     })
 }
 
-/// Appends the triangles of a primitive, checking indices and positions.
+/// Appends the triangles of a primitive, checking indices and positions; `normals` (the
+/// file's, one per position, moved by the inverse transpose of `transform`) are kept in
+/// [`TriMesh::normals`], zero for primitives without them.
 fn append(
     path: &Path,
     what: &str,
     mesh: &mut TriMesh,
     positions: &[Vec3],
+    normals: Option<&[Vec3]>,
     indices: &[u32],
     transform: Mat4,
 ) -> Result<(), LoadError> {
+    if let Some(n) = normals.filter(|n| n.len() != positions.len()) {
+        return Err(LoadError::Unreadable {
+            path: path.to_path_buf(),
+            reason: format!(
+                "{what}: {} normals for {} positions",
+                n.len(),
+                positions.len()
+            ),
+        });
+    }
     if !indices.len().is_multiple_of(3) {
         return Err(LoadError::Unreadable {
             path: path.to_path_buf(),
@@ -89,6 +105,17 @@ fn append(
             });
         }
         mesh.positions.push(w);
+    }
+    if normals.is_some() || !mesh.normals.is_empty() {
+        // Vertices before the first primitive with normals have none.
+        mesh.normals.resize(base as usize, Vec3::ZERO);
+        // A singular transform leaves no normal direction: they are computed instead.
+        let m = glam::Mat3::from_mat4(transform);
+        let to_world = (m.determinant() != 0.0).then(|| m.inverse().transpose());
+        match (normals, to_world) {
+            (Some(n), Some(to_world)) => mesh.normals.extend(n.iter().map(|&n| to_world * n)),
+            _ => mesh.normals.resize(mesh.positions.len(), Vec3::ZERO),
+        }
     }
     mesh.triangles.extend(
         indices
@@ -233,11 +260,14 @@ fn gltf_mesh(path: &Path, bytes: &[u8]) -> Result<TriMesh, LoadError> {
                     return Err(unreadable(format!("{what} has no POSITION attribute")));
                 };
                 let positions: Vec<Vec3> = positions.map(Vec3::from).collect();
+                let normals: Option<Vec<Vec3>> =
+                    reader.read_normals().map(|n| n.map(Vec3::from).collect());
                 let indices: Vec<u32> = match reader.read_indices() {
                     Some(ix) => ix.into_u32().collect(),
                     None => (0..positions.len() as u32).collect(),
                 };
-                append(path, &what, &mut mesh, &positions, &indices, world)?;
+                let normals = normals.as_deref();
+                append(path, &what, &mut mesh, &positions, normals, &indices, world)?;
                 let [r, g, b, _] = prim.material().pbr_metallic_roughness().base_color_factor();
                 let color =
                     (prim.material().index().is_some()).then(|| [r, g, b].map(linear_to_srgb));
@@ -278,14 +308,18 @@ fn linear_to_srgb(c: f32) -> f32 {
     }
 }
 
-/// Reads the faces of a Wavefront OBJ file (polygons are triangulated as fans).
+/// Reads the faces of a Wavefront OBJ file (polygons are triangulated as fans), with their
+/// `vn` normals where faces name them, and each material's diffuse colour (`Kd` of the
+/// `mtllib` files, read as sRGB) as the colour of its faces' group.
 #[cfg(feature = "obj")]
 pub fn read_obj(path: &Path) -> Result<TriMesh, LoadError> {
     parse_obj(&read_bytes(path)?, path)
 }
 
 /// As [`read_obj`], from the file's bytes (`path` names it in errors; material files are
-/// never read).
+/// read from its folder: relative names below it only, as glTF buffers — a material file
+/// that is missing, unreadable or outside is a warning in [`TriMesh::warnings`] and its
+/// faces are drawn in the default colour).
 #[cfg(feature = "obj")]
 pub fn parse_obj(text: &[u8], path: &Path) -> Result<TriMesh, LoadError> {
     let options = tobj::LoadOptions {
@@ -293,13 +327,34 @@ pub fn parse_obj(text: &[u8], path: &Path) -> Result<TriMesh, LoadError> {
         single_index: false,
         ..Default::default()
     };
-    let (models, _) = tobj::load_obj_buf(&mut std::io::Cursor::new(text), &options, |_| {
-        Err(tobj::LoadError::GenericFailure)
-    })
-    .map_err(|e| LoadError::Unreadable {
-        path: path.to_path_buf(),
-        reason: format!("not a valid OBJ file: {e}"),
-    })?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    let problems = std::cell::RefCell::new(Vec::new());
+    let load_mtl = |name: &Path| {
+        let text = name.to_string_lossy();
+        let read = safe_buffer_uri(&text)
+            .and_then(|()| std::fs::read(base.join(name)).map_err(|e| e.to_string()));
+        match read {
+            Ok(bytes) => tobj::load_mtl_buf(&mut std::io::Cursor::new(bytes)).inspect_err(|e| {
+                problems
+                    .borrow_mut()
+                    .push(format!("material file {text:?}: {e}"))
+            }),
+            Err(e) => {
+                problems
+                    .borrow_mut()
+                    .push(format!("material file {text:?}: {e}"));
+                Err(tobj::LoadError::OpenFileFailed)
+            }
+        }
+    };
+    let (models, materials) =
+        tobj::load_obj_buf(&mut std::io::Cursor::new(text), &options, load_mtl).map_err(|e| {
+            LoadError::Unreadable {
+                path: path.to_path_buf(),
+                reason: format!("not a valid OBJ file: {e}"),
+            }
+        })?;
+    let materials = materials.unwrap_or_default();
     let mut mesh = TriMesh::default();
     for m in &models {
         let positions: Vec<Vec3> = m
@@ -309,14 +364,57 @@ pub fn parse_obj(text: &[u8], path: &Path) -> Result<TriMesh, LoadError> {
             .map(|p| Vec3::new(p[0], p[1], p[2]))
             .collect();
         let what = format!("object {:?}", m.name);
-        append(
-            path,
-            &what,
-            &mut mesh,
-            &positions,
-            &m.mesh.indices,
-            Mat4::IDENTITY,
-        )?;
+        let (ix, nix) = (&m.mesh.indices, &m.mesh.normal_indices);
+        if !m.mesh.normals.is_empty() && nix.len() == ix.len() {
+            // One vertex per corner with its normal; welding merges them again.
+            let normals: Vec<Vec3> = m
+                .mesh
+                .normals
+                .chunks_exact(3)
+                .map(|n| Vec3::new(n[0], n[1], n[2]))
+                .collect();
+            let mut corners = Vec::with_capacity(ix.len());
+            let mut corner_normals = Vec::with_capacity(ix.len());
+            for (&i, &n) in ix.iter().zip(nix) {
+                let (Some(&p), Some(&n)) = (positions.get(i as usize), normals.get(n as usize))
+                else {
+                    return Err(LoadError::Unreadable {
+                        path: path.to_path_buf(),
+                        reason: format!("{what}: a face index is out of range"),
+                    });
+                };
+                corners.push(p);
+                corner_normals.push(n);
+            }
+            let indices: Vec<u32> = (0..corners.len() as u32).collect();
+            let normals = Some(&corner_normals[..]);
+            append(
+                path,
+                &what,
+                &mut mesh,
+                &corners,
+                normals,
+                &indices,
+                Mat4::IDENTITY,
+            )?;
+        } else {
+            append(path, &what, &mut mesh, &positions, None, ix, Mat4::IDENTITY)?;
+        }
+        let color = m
+            .mesh
+            .material_id
+            .and_then(|k| materials.get(k))
+            .and_then(|mat| mat.diffuse)
+            .map(|kd| {
+                kd.map(|c| {
+                    if c.is_finite() {
+                        c.clamp(0.0, 1.0)
+                    } else {
+                        1.0
+                    }
+                })
+            });
+        push_group(&mut mesh, color);
     }
     if mesh.triangles.is_empty() {
         return Err(LoadError::NoFaces {
@@ -324,12 +422,35 @@ pub fn parse_obj(text: &[u8], path: &Path) -> Result<TriMesh, LoadError> {
             reason: "no faces".into(),
         });
     }
+    if mesh.groups.iter().all(|g| g.color.is_none()) {
+        // No colours: one group, as a file without materials always was.
+        mesh.groups.clear();
+    }
+    mesh.warnings = problems.into_inner();
     Ok(mesh)
 }
 
+#[cfg(any(feature = "obj", feature = "ply"))]
+/// Ends a group in `color` at the mesh's last triangle (extending the previous group when it
+/// has the same colour).
+fn push_group(mesh: &mut TriMesh, color: Option<[f32; 3]>) {
+    let end = mesh.triangles.len();
+    match mesh.groups.last_mut() {
+        Some(g) if g.color == color => g.end = end,
+        _ => mesh.groups.push(crate::model::mesh::TriGroup {
+            part: 0,
+            color,
+            end,
+        }),
+    }
+}
+
 /// Reads the faces of a PLY file (ASCII or binary, with `ply-rs`): the `x`, `y`, `z` of every
-/// `vertex` and the `vertex_indices` (or `vertex_index`) list of every `face`; polygons are
-/// triangulated as fans. Element counts larger than the file could hold are refused before
+/// `vertex` (and `nx`, `ny`, `nz` when the vertices have them) and the `vertex_indices` (or
+/// `vertex_index`) list of every `face`; polygons are triangulated as fans. Colours
+/// (`red`, `green`, `blue`: a face's own, else the one two of its corners share, else its first
+/// corner's) become groups, triangles reordered so each colour is one run; more than
+/// [`MAX_COLOR_GROUPS`] colours are drawn in their mean with a warning. Element counts larger than the file could hold are refused before
 /// anything is allocated, and a panic inside the parser becomes an error.
 #[cfg(feature = "ply")]
 pub fn read_ply(path: &Path) -> Result<TriMesh, LoadError> {
@@ -414,7 +535,20 @@ pub fn parse_ply(bytes: &[u8], path: &Path) -> Result<TriMesh, LoadError> {
         }
         positions.push(Vec3::from(xyz));
     }
+    // Normals when every vertex has all three (a vertex with a broken one gets none: zero).
+    let has = |name: &str| vertices.first().is_some_and(|v| v.contains_key(name));
+    let normals: Option<Vec<Vec3>> = ["nx", "ny", "nz"].iter().all(|n| has(n)).then(|| {
+        let get = |v: &DefaultElement, n: &str| v.get(n).and_then(scalar).map(|x| x as f32);
+        (vertices.iter())
+            .map(|v| match (get(v, "nx"), get(v, "ny"), get(v, "nz")) {
+                (Some(x), Some(y), Some(z)) => Vec3::new(x, y, z),
+                _ => Vec3::ZERO,
+            })
+            .collect()
+    });
+    let vertex_colors: Vec<Option<[f32; 3]>> = vertices.iter().map(ply_color).collect();
     let mut indices = Vec::new();
+    let mut face_colors: Vec<Option<[f32; 3]>> = Vec::new();
     for (k, f) in ply.payload.get("face").into_iter().flatten().enumerate() {
         let corners = f
             .get("vertex_indices")
@@ -430,23 +564,122 @@ pub fn parse_ply(bytes: &[u8], path: &Path) -> Result<TriMesh, LoadError> {
         let corner = |i: i64| {
             u32::try_from(i).map_err(|_| unreadable(format!("face {k}: index {i} is negative")))
         };
+        let color = ply_color(f);
         for j in 1..corners.len() - 1 {
             indices.extend([
                 corner(corners[0])?,
                 corner(corners[j])?,
                 corner(corners[j + 1])?,
             ]);
+            face_colors.push(color);
         }
     }
     let mut mesh = TriMesh::default();
-    append(path, "PLY", &mut mesh, &positions, &indices, Mat4::IDENTITY)?;
+    let normals = normals.as_deref();
+    append(
+        path,
+        "PLY",
+        &mut mesh,
+        &positions,
+        normals,
+        &indices,
+        Mat4::IDENTITY,
+    )?;
     if mesh.triangles.is_empty() {
         return Err(LoadError::NoFaces {
             path: path.to_path_buf(),
             reason: "no faces".into(),
         });
     }
+    // A face's own colour, else its corners' (indices were checked by `append`).
+    let colors: Vec<Option<[f32; 3]>> = (mesh.triangles.iter().zip(&face_colors))
+        .map(|(t, &face)| face.or_else(|| majority(t.map(|v| vertex_colors[v as usize]))))
+        .collect();
+    color_groups(&mut mesh, &colors);
     Ok(mesh)
+}
+
+#[cfg(feature = "ply")]
+/// Most distinct triangle colours a PLY file is split into groups by (each group is patched
+/// on its own); beyond it, colours vary per vertex (a scan) and the mesh is drawn in their
+/// mean, with a warning.
+pub const MAX_COLOR_GROUPS: usize = 64;
+
+/// The `red`, `green`, `blue` (or `diffuse_red`, …) of a PLY element: integers are 0–255,
+/// floating-point values 0–1; sRGB.
+#[cfg(feature = "ply")]
+fn ply_color(e: &ply_rs::ply::DefaultElement) -> Option<[f32; 3]> {
+    use ply_rs::ply::Property;
+    let channel = |name: &str| {
+        let p = e.get(name).or_else(|| e.get(&format!("diffuse_{name}")))?;
+        let x = match *p {
+            Property::UChar(x) => x as f32 / 255.0,
+            Property::Char(x) => x as f32 / 255.0,
+            Property::UShort(x) => x as f32 / 255.0,
+            Property::Short(x) => x as f32 / 255.0,
+            Property::UInt(x) => x as f32 / 255.0,
+            Property::Int(x) => x as f32 / 255.0,
+            Property::Float(x) => x,
+            Property::Double(x) => x as f32,
+            _ => return None,
+        };
+        x.is_finite().then(|| x.clamp(0.0, 1.0))
+    };
+    Some([channel("red")?, channel("green")?, channel("blue")?])
+}
+
+#[cfg(feature = "ply")]
+/// The colour two or three corners share, else the first corner's.
+fn majority(c: [Option<[f32; 3]>; 3]) -> Option<[f32; 3]> {
+    if c[1] == c[2] { c[1] } else { c[0] }
+}
+
+#[cfg(feature = "ply")]
+/// Groups `mesh`'s triangles by `colors` (one per triangle): triangles reordered so each
+/// colour is one run (in the order colours first occur, stable within a colour), one group
+/// per colour. More than [`MAX_COLOR_GROUPS`] colours: one group in their mean, and a
+/// warning. No colours: no groups.
+fn color_groups(mesh: &mut TriMesh, colors: &[Option<[f32; 3]>]) {
+    if colors.iter().all(Option::is_none) {
+        return;
+    }
+    let mut distinct: Vec<Option<[f32; 3]>> = Vec::new();
+    let mut index: std::collections::HashMap<Option<[u32; 3]>, u32> = Default::default();
+    let keys: Vec<u32> = colors
+        .iter()
+        .map(|c| {
+            *index
+                .entry(c.map(|c| c.map(f32::to_bits)))
+                .or_insert_with(|| {
+                    distinct.push(*c);
+                    (distinct.len() - 1) as u32
+                })
+        })
+        .collect();
+    if distinct.len() > MAX_COLOR_GROUPS {
+        let known: Vec<[f32; 3]> = colors.iter().flatten().copied().collect();
+        let sum = known.iter().fold(Vec3::ZERO, |s, &c| s + Vec3::from(c));
+        let mean = (sum / known.len() as f32).to_array();
+        mesh.warnings.push(format!(
+            "{} distinct colours (more than {MAX_COLOR_GROUPS}): drawn in their mean colour, \
+             colours per vertex are not drawn",
+            distinct.len()
+        ));
+        push_group(mesh, Some(mean));
+        return;
+    }
+    let mut order: Vec<usize> = (0..mesh.triangles.len()).collect();
+    order.sort_by_key(|&t| keys[t]);
+    mesh.triangles = order.iter().map(|&t| mesh.triangles[t]).collect();
+    let mut end = 0;
+    for (k, c) in distinct.iter().enumerate() {
+        end += keys.iter().filter(|&&x| x == k as u32).count();
+        mesh.groups.push(crate::model::mesh::TriGroup {
+            part: 0,
+            color: *c,
+            end,
+        });
+    }
 }
 
 /// Without the `obj` feature: an error naming it.

@@ -25,8 +25,9 @@ use std::path::{Path, PathBuf};
 use crate::mt::{MtHierarchy, MtParts};
 
 /// Version of the file format *and* of the hierarchy build: bump it whenever either changes,
-/// so older caches stop matching.
-pub const FORMAT_VERSION: u32 = 2;
+/// so older caches stop matching. 3: patches' vertices split by normal at creases and where
+/// the file's normals differ (`model::creases`), so a patch's vertex numbering changed.
+pub const FORMAT_VERSION: u32 = 3;
 
 const MAGIC: &[u8; 8] = b"PWMTCACH";
 const HEADER: usize = 8 + 4 + 16 + 8 + 16;

@@ -1,6 +1,7 @@
 //! Triangle meshes split into patches.
 //!
-//! A [`TriMesh`] is welded (vertices at the same position are one vertex) and split by
+//! A [`TriMesh`] is welded (vertices at the same position are one vertex, split again where
+//! their normals differ: [`super::creases`]) and split by
 //! [`partition`] into patches of about a target number of triangles by region growing over
 //! edge-adjacent triangles (breadth first from a seed, so patches come out compact), tiny
 //! leftover regions merged into a neighbour. Each [`MeshPatch`] keeps its own vertices and the
@@ -12,18 +13,29 @@ use std::collections::HashMap;
 
 use glam::Vec3;
 
+use super::creases;
 use crate::util::IntMap;
 
 /// An indexed triangle mesh in world coordinates.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct TriMesh {
     pub positions: Vec<Vec3>,
+    /// The file's vertex normals, one per position (empty: the file gives none; a zero vector:
+    /// none for that vertex). After [`TriMesh::weld`]: one per vertex, always (the file's, or
+    /// computed with creases, [`crate::model::creases`]).
+    pub normals: Vec<Vec3>,
+    /// After [`TriMesh::weld`]: for every vertex, the index of its position among the distinct
+    /// positions — vertices split by their normals (a crease) share it, and edges across a
+    /// crease are adjacent through it. Empty: every vertex is its own position.
+    pub position_ids: Vec<u32>,
     pub triangles: Vec<[u32; 3]>,
     /// Runs of triangles from one source object (a glTF node's primitive), in order; empty:
     /// the whole mesh is one unnamed, uncoloured part. Patches never cross a group.
     pub groups: Vec<TriGroup>,
     /// Names of the parts groups belong to ([`TriGroup::part`] indexes it).
     pub part_names: Vec<String>,
+    /// What the reader could not keep (a missing material file, colours it cannot draw).
+    pub warnings: Vec<String>,
 }
 
 /// Triangles `previous end .. end` of a [`TriMesh`]: one part's, in one colour.
@@ -60,9 +72,19 @@ impl TriMesh {
         self.groups.get(g as usize).copied().unwrap_or_default()
     }
 
+    /// The position index of vertex `v` ([`TriMesh::position_ids`]).
+    pub fn position_id(&self, v: u32) -> u32 {
+        self.position_ids.get(v as usize).copied().unwrap_or(v)
+    }
+
     /// Merges vertices at bit-identical positions (glTF splits vertices by normal and texture
-    /// coordinate) and drops triangles that become degenerate (two equal corners). Returns how
-    /// many triangles were dropped.
+    /// coordinate), drops triangles that become degenerate (two equal corners), gives every
+    /// corner a normal — the file's ([`TriMesh::normals`]) where it has one, else the
+    /// area-weighted normal of the faces around it within [`creases::CREASE_ANGLE_DEG`]
+    /// ([`creases::creased_normals`]) — and splits each position into one vertex per distinct
+    /// normal ([`creases::wedges`]; [`TriMesh::position_ids`] says which vertices share a
+    /// position). Without creases or split normals the vertices are the distinct positions in
+    /// the order they first occur. Returns how many triangles were dropped.
     pub fn weld(&mut self) -> usize {
         let mut index: HashMap<[u32; 3], u32> = HashMap::with_capacity(self.positions.len());
         let mut positions = Vec::with_capacity(self.positions.len());
@@ -78,18 +100,45 @@ impl TriMesh {
                 })
             })
             .collect();
-        self.positions = positions;
         let before = self.triangles.len();
         let groups = self.triangle_groups();
         let mut kept_groups = Vec::with_capacity(before);
-        self.triangles = (self.triangles.iter().zip(&groups))
-            .map(|(t, &g)| (t.map(|i| remap[i as usize]), g))
-            .filter(|(t, _)| t[0] != t[1] && t[1] != t[2] && t[2] != t[0])
-            .map(|(t, g)| {
+        // The file's vertex of every kept corner, for its normal.
+        let mut sources: Vec<[u32; 3]> = Vec::with_capacity(before);
+        let welded: Vec<[u32; 3]> = (self.triangles.iter().zip(&groups))
+            .map(|(t, &g)| (t.map(|i| remap[i as usize]), *t, g))
+            .filter(|(t, _, _)| t[0] != t[1] && t[1] != t[2] && t[2] != t[0])
+            .map(|(t, source, g)| {
                 kept_groups.push(g);
+                sources.push(source);
                 t
             })
             .collect();
+        let authored = |v: u32| {
+            self.normals
+                .get(v as usize)
+                .filter(|n| n.is_finite())
+                .map_or(Vec3::ZERO, |n| n.normalize_or_zero())
+        };
+        let mut corner_normals: Vec<Vec3> =
+            sources.iter().flatten().map(|&v| authored(v)).collect();
+        if corner_normals.contains(&Vec3::ZERO) {
+            let computed = creases::creased_normals(&positions, &welded, creases::CREASE_ANGLE_DEG);
+            for (n, c) in corner_normals.iter_mut().zip(computed) {
+                if *n == Vec3::ZERO {
+                    *n = c;
+                }
+            }
+        }
+        let (triangles, position_ids, normals) =
+            creases::wedges(positions.len(), &welded, &corner_normals);
+        self.positions = position_ids
+            .iter()
+            .map(|&p| positions[p as usize])
+            .collect();
+        self.normals = normals;
+        self.position_ids = position_ids;
+        self.triangles = triangles;
         // Each group ends where its last kept triangle is.
         for (g, group) in self.groups.iter_mut().enumerate() {
             group.end = kept_groups.partition_point(|&k| k <= g as u32);
@@ -102,8 +151,8 @@ impl TriMesh {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct MeshPatch {
     pub positions: Vec<Vec3>,
-    /// Area-weighted vertex normals of the whole mesh (so shading is continuous across
-    /// patch borders).
+    /// The mesh's vertex normals ([`TriMesh::weld`]: the file's, or area-weighted within the
+    /// crease angle), so shading is continuous across patch borders and hard at creases.
     pub normals: Vec<Vec3>,
     pub triangles: Vec<[u32; 3]>,
     /// Closed border loops as indices into `positions` (first vertex not repeated).
@@ -263,10 +312,24 @@ mod tests {
             triangles: vec![[0, 1, 2], [3, 5, 2], [0, 4, 1]],
             ..TriMesh::default()
         };
+        let bare = m.clone();
+        // The file's normals, equal on both faces: smooth.
+        m.normals = vec![Vec3::Z; 6];
         let dropped = m.weld();
         assert_eq!(dropped, 1);
         assert_eq!(m.positions.len(), 4);
         assert_eq!(m.triangles, vec![[0, 1, 2], [1, 3, 2]]);
+        assert_eq!(m.normals, vec![Vec3::Z; 4]);
+        assert_eq!(m.position_ids, vec![0, 1, 2, 3]);
+        // Without normals the faces meet at 54.7° (> 40°): the shared edge 1–2 is a crease,
+        // its two vertices split in two, each with its face's normal.
+        let mut m = bare;
+        assert_eq!(m.weld(), 1);
+        assert_eq!(m.position_ids, vec![0, 1, 1, 2, 2, 3]);
+        assert_eq!(m.triangles, vec![[0, 1, 3], [2, 5, 4]]);
+        assert_eq!(m.normals[1], Vec3::Z);
+        assert!((m.normals[2] - Vec3::new(-1.0, -1.0, 1.0).normalize()).length() < 1e-6);
+        assert_eq!(m.positions[1], m.positions[2]);
     }
 
     #[test]

@@ -4,6 +4,7 @@
 //! [`crate::tessellate::PatchMesh`] for a view, `render` draws those.
 
 pub mod bezier;
+pub mod creases;
 pub mod memory;
 pub mod merge;
 pub mod mesh;

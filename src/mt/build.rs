@@ -1,8 +1,9 @@
 //! Building an MT hierarchy by half-edge collapses (Holst and Schumann, the
 //! `holst-reduced-mt-hierarchy` paper, section 2): collapses ordered by Garland–Heckbert
 //! quadric error, with heavily weighted constraint planes along the patch border (borders
-//! collapse along themselves; corners turning by more than 45° stay), the link condition and
-//! no flipped or degenerate triangles. One node per collapse; node error = sampled two-sided
+//! collapse along themselves; corners turning by more than 45° stay), the link condition,
+//! no flipped or degenerate triangles and no collapse that removes every triangle of its
+//! vertex (an ear: its fan would be empty, the removed surface unmeasured). One node per collapse; node error = sampled two-sided
 //! Hausdorff distance between the collapse's fan and the original triangles its region covers,
 //! maxed with the errors of the nodes whose triangles it removes (monotone along the DAG).
 //!
@@ -240,7 +241,10 @@ impl Builder {
             .iter()
             .filter(|&&tr| self.tris[tr as usize].contains(&to))
             .count();
-        if shared == 0 {
+        // Some triangle of `from` must survive: a collapse that removes them all (an ear on
+        // the border: a corner in one triangle, common where creases bound a flat fan) would
+        // delete surface with an empty fan, whose measured error is nothing.
+        if shared == 0 || shared == self.around[f].len() {
             return false;
         }
         let marked = self.next_generation();
@@ -574,6 +578,50 @@ mod tests {
             assert!(
                 worst <= eps + 1e-9,
                 "ε {eps}: Hausdorff {worst} (achieved {achieved})"
+            );
+        }
+    }
+
+    /// A flat polygon triangulated as a zig-zag strip (as modellers write a candle's top)
+    /// has ears: border corners in one triangle each. Collapsing one would remove its
+    /// triangle and leave no fan to measure the error on (a hole measured as error 0); every
+    /// cut keeps the polygon whole within its error.
+    #[test]
+    fn ears_are_not_collapsed_away() {
+        let n = 16;
+        let ring: Vec<Vec3> = (0..n)
+            .map(|k| {
+                let a = std::f32::consts::TAU * k as f32 / n as f32;
+                Vec3::new(a.cos(), a.sin(), 0.0)
+            })
+            .collect();
+        // Zig-zag: 0, 1, n-1, 2, n-2, ... so vertices 0 and n/2 are ears.
+        let order: Vec<u32> = std::iter::once(0)
+            .chain((1..n).flat_map(|k| [k, n - k]).take(n as usize - 1))
+            .collect();
+        let triangles: Vec<[u32; 3]> = order
+            .windows(3)
+            .enumerate()
+            .map(|(k, w)| {
+                if k % 2 == 0 {
+                    [w[0], w[1], w[2]]
+                } else {
+                    [w[1], w[0], w[2]]
+                }
+            })
+            .collect();
+        assert_eq!(triangles.len(), n as usize - 2);
+        let h = MtHierarchy::build(&ring, &triangles);
+        let pos: Vec<DVec3> = ring.iter().map(|p| p.as_dvec3()).collect();
+        let mut cut = Vec::new();
+        let mut errors = h.node_error.clone();
+        errors.sort_by(f64::total_cmp);
+        for &eps in &errors {
+            h.cut(eps, &mut cut);
+            let worst = dense_hausdorff(&pos, &cut, &triangles, 8);
+            assert!(
+                worst <= eps * (1.0 + 1e-9) + 1e-9,
+                "ε {eps}: Hausdorff {worst}"
             );
         }
     }

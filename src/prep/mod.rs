@@ -290,7 +290,7 @@ fn mesh_parts(
     Vec<String>,
 ) {
     let dropped = m.weld();
-    let mut warnings = Vec::new();
+    let mut warnings = std::mem::take(&mut m.warnings);
     if dropped > 0 {
         warnings.push(format!(
             "{dropped} degenerate triangles dropped after welding"

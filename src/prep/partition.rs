@@ -46,11 +46,20 @@ fn rows<T: Copy>(groups: usize, items: &[T], key: impl Fn(&T) -> usize) -> (Vec<
 fn adjacency(mesh: &TriMesh) -> Adjacency {
     let tri_group = mesh.triangle_groups();
     let n = mesh.triangles.len();
-    let vertices = mesh.positions.len();
-    // (smaller vertex, larger vertex, triangle) of every edge, grouped by the smaller vertex,
-    // then each group sorted: equal edges are adjacent.
+    // Vertices split by their normals (a crease, `TriMesh::position_ids`) are one here: the
+    // faces on both sides of a crease are neighbours, and a patch may hold both.
+    let vertices = mesh
+        .position_ids
+        .iter()
+        .map(|&p| p as usize + 1)
+        .max()
+        .unwrap_or(0);
+    let vertices = vertices.max(mesh.positions.len());
+    // (smaller position, larger position, triangle) of every edge, grouped by the smaller
+    // one, then each group sorted: equal edges are adjacent.
     let mut edges: Vec<(u32, u32, u32)> = Vec::with_capacity(3 * n);
     for (t, tri) in mesh.triangles.iter().enumerate() {
+        let tri = tri.map(|v| mesh.position_id(v));
         for k in 0..3 {
             let (a, b) = edge(tri[k], tri[(k + 1) % 3]);
             edges.push((a, b, t as u32));
@@ -161,6 +170,13 @@ pub fn partition(mesh: &TriMesh, target: usize) -> Vec<MeshPatch> {
         });
         members[k].push(t as u32);
     }
-    let normals = vertex_normals(mesh);
-    members.iter().map(|m| extract(mesh, &normals, m)).collect()
+    // A welded mesh has its normals (the file's or creased); a bare one smooth normals.
+    let computed;
+    let normals = if mesh.normals.len() == mesh.positions.len() {
+        &mesh.normals
+    } else {
+        computed = vertex_normals(mesh);
+        &computed
+    };
+    members.iter().map(|m| extract(mesh, normals, m)).collect()
 }
