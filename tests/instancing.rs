@@ -103,6 +103,8 @@ fn each_shared_mesh_is_uploaded_once_for_all_its_placements() {
     assert!(inst_stats.uploaded_bytes() < copy_stats.uploaded_bytes());
     // A 64-byte record per placement and a 4-byte index per drawn one.
     assert_eq!(inst_stats.instance_bytes, 68 * placed.len() as u64);
+    assert_eq!(inst.memory().records_used, 64 * placed.len() as u64);
+    assert_eq!(copies.memory().records_used, 0);
     assert_eq!(copies.shared_meshes(), 0);
     assert_eq!(copies.placed_patches(), 0);
     assert_eq!(copy_stats.instance_bytes, 0);

@@ -146,7 +146,8 @@ pub struct FlythroughSummary {
     /// Tessellations shared by the placements of a part over the whole run.
     pub instancing: InstancingStats,
     /// After the last frame: shared meshes resident on the GPU, patches drawn as their
-    /// placements (instanced parts), and the resident geometry's live bytes.
+    /// placements (instanced parts), and the resident geometry's live bytes (records
+    /// included).
     pub shared_meshes: usize,
     pub placed_patches: usize,
     pub resident_bytes: u64,
@@ -195,7 +196,7 @@ pub fn run(
     if let Some(r) = state.resident() {
         summary.shared_meshes = r.shared_meshes();
         summary.placed_patches = r.placed_patches();
-        summary.resident_bytes = r.memory().used.iter().sum();
+        summary.resident_bytes = r.memory().used_total();
     }
     summary.initial_upload_bytes = initial_upload.uploaded_bytes();
     Ok((records, summary))

@@ -139,11 +139,19 @@ pub struct ResidentMemory {
     pub capacity: [u64; STREAMS],
     /// Of which in live ranges.
     pub used: [u64; STREAMS],
+    /// Instanced parts: the placement records' buffer, and the bytes of live records.
+    pub records_capacity: u64,
+    pub records_used: u64,
 }
 
 impl ResidentMemory {
     pub fn capacity_total(&self) -> u64 {
-        self.capacity.iter().sum()
+        self.capacity.iter().sum::<u64>() + self.records_capacity
+    }
+
+    /// Bytes in live ranges and records.
+    pub fn used_total(&self) -> u64 {
+        self.used.iter().sum::<u64>() + self.records_used
     }
 }
 
@@ -393,6 +401,7 @@ impl ResidentGeometry {
                 m.used[p] += pool.alloc.used() * pool.unit;
             }
         }
+        (m.records_capacity, m.records_used) = self.placed.records_memory();
         m
     }
 

@@ -287,6 +287,13 @@ impl PlacedDraws {
         Ok(())
     }
 
+    /// Bytes of the records' buffer, and of the live records.
+    pub(super) fn records_memory(&self) -> (u64, u64) {
+        self.records.as_ref().map_or((0, 0), |(pool, _)| {
+            (pool.bytes(), pool.alloc.used() * pool.unit)
+        })
+    }
+
     /// A record's index (after [`PlacedDraws::reserve`] made room for it).
     fn alloc_record(&mut self) -> u64 {
         self.records
