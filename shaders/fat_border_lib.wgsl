@@ -206,3 +206,58 @@ fn fat_border_vertex(i: u32, len: u32, viewer: vec4<f32>) -> vec4<f32> {
     let pos = fat_border_position(prev, fb_cur(p), next, viewer, fb_word_f(p, 3u), code);
     return vec4<f32>(pos, bitcast<f32>(p));
 }
+
+// ---- Instanced parts: a shared mesh drawn once per placement ----
+//
+// A part placed k times is uploaded once in its surface's own coordinates and drawn with each
+// placement (`render::resident`, instances; CPU twin `render::fat_border::place`). Placements
+// are similarities (rotation or reflection, uniform scale, translation), given as the rows of
+// the 3 × 4 matrix; the fat border of a placement is expanded in world space from its
+// transformed ring points, with ε that of the shared mesh (already in the placement's units)
+// plus the placement's own addition.
+
+struct FbPlacement {
+    x: vec4<f32>,
+    y: vec4<f32>,
+    z: vec4<f32>,
+};
+
+// Point p moved by placement m.
+fn fb_place(m: FbPlacement, p: vec3<f32>) -> vec3<f32> {
+    let h = vec4<f32>(p, 1.0);
+    return vec3<f32>(dot(m.x, h), dot(m.y, h), dot(m.z, h));
+}
+
+// Unit normal n turned by placement m (a similarity: its linear part, normalised).
+fn fb_turn(m: FbPlacement, n: vec3<f32>) -> vec3<f32> {
+    let t = vec3<f32>(dot(m.x.xyz, n), dot(m.y.xyz, n), dot(m.z.xyz, n));
+    return fb_normalize_or(t, vec3<f32>(0.0, 0.0, 0.0));
+}
+
+// As `fat_border_vertex`, for the points of a shared mesh drawn with placement m: the ring
+// points are moved first, then expanded as every other border (ε + eps_added; a placement
+// that adds to ε draws its fat borders the whole ε wide, not the shared mesh's border width).
+fn fat_border_vertex_placed(
+    i: u32,
+    len: u32,
+    viewer: vec4<f32>,
+    m: FbPlacement,
+    eps_added: f32,
+) -> vec4<f32> {
+    let r = fb_resolve(i, len);
+    let p = r.x;
+    var flag = 0u;
+    if ((fb_info(p) & FB_INFO_STRAIGHT) != 0u) {
+        flag = FB_STRAIGHT;
+    }
+    let prev = fb_place(m, fb_cur(fb_neighbour(p, false)));
+    let next = fb_place(m, fb_cur(fb_neighbour(p, true)));
+    let cur = fb_place(m, fb_cur(p));
+    let eps = fb_word_f(p, 3u) + eps_added;
+    var code = r.y | flag;
+    if (eps_added == 0.0) {
+        code = code | (fb_info(p) & FB_WIDTH_MASK);
+    }
+    let pos = fat_border_position(prev, cur, next, viewer, eps, code);
+    return vec4<f32>(pos, bitcast<f32>(p));
+}

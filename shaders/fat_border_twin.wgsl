@@ -46,3 +46,24 @@ fn cs_pull(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     outputs[i] = fat_border_vertex(i, pull.len_count.x, pull.viewer);
 }
+
+// Compute twin of the placed vertex pulling (instanced parts): as `cs_pull`, the points moved
+// by the placement `placed` (rows of its 3 × 4 matrix; eps_added.x: ε it adds) first.
+struct PullPlaced {
+    x: vec4<f32>,
+    y: vec4<f32>,
+    z: vec4<f32>,
+    eps_added: vec4<f32>,
+};
+
+@group(0) @binding(3) var<uniform> placed: PullPlaced;
+
+@compute @workgroup_size(64)
+fn cs_pull_placed(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if (i >= pull.len_count.y) {
+        return;
+    }
+    let m = FbPlacement(placed.x, placed.y, placed.z);
+    outputs[i] = fat_border_vertex_placed(i, pull.len_count.x, pull.viewer, m, placed.eps_added.x);
+}

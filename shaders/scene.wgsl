@@ -72,6 +72,55 @@ fn vs_border(@builtin(vertex_index) i: u32) -> VsOut {
     return out;
 }
 
+// Instanced parts (`render::resident`, instances): a shared mesh drawn once per placement.
+// Each placed patch has a record (`render::resident::InstanceRecord`): the rows of its
+// placement (`FbPlacement`) and x: patch id, y: packed colour (as the vertex attribute),
+// z: bits of the ε the placement adds (fat borders). The instance attribute is the record's
+// index.
+struct PlacedRecord {
+    x: vec4<f32>,
+    y: vec4<f32>,
+    z: vec4<f32>,
+    extra: vec4<u32>,
+};
+
+@group(2) @binding(0) var<storage, read> records: array<PlacedRecord>;
+
+@vertex
+fn vs_surface_placed(
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(4) record: u32,
+) -> VsOut {
+    let r = records[record];
+    let m = FbPlacement(r.x, r.y, r.z);
+    let world = fb_place(m, position);
+    var out: VsOut;
+    out.clip = globals.view_proj * vec4<f32>(world, 1.0);
+    out.color = unpack4x8unorm(r.extra.y);
+    out.world = world;
+    out.actual = world;
+    out.normal = fb_turn(m, normal);
+    out.patch_id = r.extra.x;
+    return out;
+}
+
+@vertex
+fn vs_border_placed(@builtin(vertex_index) i: u32, @location(4) record: u32) -> VsOut {
+    let r = records[record];
+    let m = FbPlacement(r.x, r.y, r.z);
+    let fb = fat_border_vertex_placed(i, globals.mode.y, viewer(), m, bitcast<f32>(r.extra.z));
+    let k = bitcast<u32>(fb.w);
+    var out: VsOut;
+    out.clip = globals.view_proj * vec4<f32>(fb.xyz, 1.0);
+    out.world = fb_place(m, fb_cur(k));
+    out.actual = fb.xyz;
+    out.normal = fb_turn(m, fb_normal(k));
+    out.patch_id = r.extra.x;
+    out.color = unpack4x8unorm(r.extra.y);
+    return out;
+}
+
 // How much a fat border's lateral direction weighs against n·v when choosing the lit side
 // (only surfaces within asin(CONTOUR_BIAS) ≈ 14° of grazing are affected).
 const CONTOUR_BIAS: f32 = 0.25;

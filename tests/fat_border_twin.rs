@@ -9,7 +9,7 @@ use glam::{Vec3, Vec4};
 use patchwork::check::crack::SplitMix64;
 use patchwork::render::fat_border::{
     INFO_CLOSING, INFO_STRAIGHT, SLOTS_PER_POINT, STRAIGHT_FLAG, WIDTH_MASK, WIDTH_SHIFT, expand,
-    is_straight, position,
+    is_straight, position, position_placed,
 };
 use patchwork::render::shaders::FAT_BORDER_TWIN;
 use patchwork::render::{BorderGeometry, FatBorders};
@@ -315,6 +315,112 @@ fn pulled_vertices_match_the_cpu_twin() {
                     "{variant} vertex {i}: cpu {p:?} gpu {gpu_p:?} (ε {eps})"
                 );
                 checked += 1;
+            }
+        }
+    }
+    assert!(checked > 1000, "{checked}");
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct PullPlaced {
+    rows: [[f32; 4]; 3],
+    eps_added: [f32; 4],
+}
+
+/// Instanced parts: a shared mesh's points drawn with a placement (a rotation, scale 2 and a
+/// translation). The compute twin of `fat_border_vertex_placed` gives the CPU twin's
+/// positions, and those are the positions of the same rings placed in f64 first and expanded
+/// as every other border (the world-space copies' path), up to f32 rounding.
+#[test]
+fn placed_pulled_vertices_match_the_cpu_twin_and_the_placed_rings() {
+    use glam::{DMat4, DQuat, DVec3};
+    let renderer = common::renderer();
+    let gpu = renderer.gpu();
+    let meshes = ring_meshes();
+    let g = BorderGeometry::of(&meshes);
+    let m = DMat4::from_scale_rotation_translation(
+        DVec3::splat(2.0),
+        DQuat::from_axis_angle(DVec3::new(1.0, 2.0, -0.5).normalize(), 0.7),
+        DVec3::new(5.0, -3.0, 1.5),
+    );
+    assert!(patchwork::tessellate::is_similarity(&m));
+    let rows = [0, 1, 2].map(|k| m.row(k).as_vec4().to_array());
+    let eps_added = 2e-4f32;
+    // The world-space copies: the rings placed in f64, ε of the shared mesh plus the addition.
+    let copies: Vec<PatchMesh> = meshes
+        .iter()
+        .map(|mesh| PatchMesh {
+            positions: mesh
+                .positions
+                .iter()
+                .map(|p| m.transform_point3(p.as_dvec3()).as_vec3())
+                .collect(),
+            eps_target: mesh.eps_target + eps_added as f64,
+            // A placement that adds to ε draws its fat borders the whole ε wide.
+            border_error: None,
+            ..mesh.clone()
+        })
+        .collect();
+    let world = BorderGeometry::of(&copies);
+    assert_eq!(world.points.len(), g.points.len());
+    let points = gpu
+        .device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("twin points"),
+            contents: bytemuck::cast_slice(&g.points),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+    let placed = gpu
+        .device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("twin placement"),
+            contents: bytemuck::bytes_of(&PullPlaced {
+                rows,
+                eps_added: [eps_added, 0.0, 0.0, 0.0],
+            }),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+    let count = (g.points.len() - 1) * SLOTS_PER_POINT;
+    let mut checked = 0;
+    for eye in [Vec3::new(13.0, -8.0, 20.0), Vec3::new(4.0, -2.5, 2.0)] {
+        for variant in FatBorders::ALL_ON {
+            let codes = g.index_count(variant) / g.points.len();
+            let pull = Pull {
+                viewer: eye.extend(1.0).into(),
+                len_count: [codes as u32, count as u32, 0, 0],
+            };
+            let params = gpu
+                .device
+                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("twin pull"),
+                    contents: bytemuck::bytes_of(&pull),
+                    usage: wgpu::BufferUsages::UNIFORM,
+                });
+            let out = run_twin(
+                gpu,
+                "cs_pull_placed",
+                count,
+                &[(0, 2, &params), (0, 3, &placed), (1, 0, &points)],
+            );
+            for (i, o) in out.iter().enumerate() {
+                let (p, j) =
+                    position_placed(&g.points, variant, i, eye.extend(1.0), &rows, eps_added);
+                assert_eq!(o[3].to_bits() as usize, j, "{variant} vertex {i}: point");
+                let gpu_p = Vec3::new(o[0], o[1], o[2]);
+                let eps = g.points[j].eps + eps_added;
+                let tol = 1e-4 * eps + 4e-6 * (1.0 + p.length());
+                let err = (p - gpu_p).length();
+                assert!(err <= tol, "{variant} vertex {i}: cpu {p:?} gpu {gpu_p:?}");
+                // The world-space path (where a ring's straight joints agree: the flags are
+                // decided on the points, placed or not).
+                if world.points[j].info == g.points[j].info {
+                    let (w, k) = position(&world.points, variant, i, eye.extend(1.0));
+                    assert_eq!(k, j);
+                    let err = (p - w).length();
+                    assert!(err <= tol, "{variant} vertex {i}: placed {p:?} copy {w:?}");
+                    checked += 1;
+                }
             }
         }
     }

@@ -106,6 +106,7 @@ fn a_copy_placed_for_another_placement_differs() {
     let (mut own_a, mut own_b) = (PatchMesh::default(), PatchMesh::default());
     t.patch(&scene.patches[a], eps, &mut own_a);
     t.patch(&scene.patches[b], eps, &mut own_b);
+    let unplaced = std::sync::Arc::new(unplaced);
     assert_eq!(
         placed(&unplaced, &scene.patches[a]).positions,
         own_a.positions

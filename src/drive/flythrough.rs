@@ -148,6 +148,12 @@ pub struct FlythroughSummary {
     pub total_crack_pixels: Option<usize>,
     /// Tessellations shared by the placements of a part over the whole run.
     pub instancing: InstancingStats,
+    /// After the last frame: shared meshes resident on the GPU, patches drawn as their
+    /// placements (instanced parts), and the resident geometry's live bytes (records
+    /// included).
+    pub shared_meshes: usize,
+    pub placed_patches: usize,
+    pub resident_bytes: u64,
 }
 
 /// Runs the fly-through; `on_frame` sees every record (progress).
@@ -192,6 +198,11 @@ pub fn run(
     let mut summary = summarize(&records, initial_ms, jump_frames(n).1);
     summary.initial_upload_ms = initial_upload_ms;
     summary.instancing = state.lod.instancing();
+    if let Some(r) = state.resident() {
+        summary.shared_meshes = r.shared_meshes();
+        summary.placed_patches = r.placed_patches();
+        summary.resident_bytes = r.memory().used_total();
+    }
     summary.initial_upload_bytes = initial_upload.uploaded_bytes();
     Ok((records, summary))
 }
@@ -240,6 +251,9 @@ pub fn summarize(records: &[FrameRecord], initial_ms: f64, jump_frame: usize) ->
         max_crack_pixels: cracks.iter().copied().max(),
         total_crack_pixels: (!cracks.is_empty()).then(|| cracks.iter().sum()),
         instancing: InstancingStats::default(),
+        shared_meshes: 0,
+        placed_patches: 0,
+        resident_bytes: 0,
     }
 }
 

@@ -24,7 +24,7 @@ use rayon::prelude::*;
 use super::Levels;
 use crate::model::Scene;
 use crate::mt::CutState;
-use crate::tessellate::{PatchMesh, Tessellators, placed, shared_surface};
+use crate::tessellate::{Instance, PatchMesh, Tessellators, placed, shared_surface};
 
 /// Frames a shared tessellation is kept without being asked for.
 pub const KEEP_FRAMES: u64 = 16;
@@ -190,15 +190,28 @@ impl SharedTessellations {
 }
 
 /// A copy of `source` (the tessellation of the first patch of `share`'s class) for `patch`:
-/// translated by `share.delta`, its error raised by `share.deviation`.
-fn translated(source: &PatchMesh, patch: &crate::model::Patch, share: &Share) -> PatchMesh {
-    let mut out = source.clone();
+/// translated by `share.delta`, its error raised by `share.deviation`; an [`Instance`] of
+/// `source`.
+fn translated(source: &Arc<PatchMesh>, patch: &crate::model::Patch, share: &Share) -> PatchMesh {
+    let mut out = PatchMesh::clone(source);
     out.patch_id = patch.id;
     out.color = patch.color;
     for p in &mut out.positions {
         *p = (p.as_dvec3() + share.delta).as_vec3();
     }
     out.error += share.deviation;
+    if share.deviation > 0.0 {
+        // The border moved off its curve by up to the deviation too: fat borders the whole ε
+        // wide, as a placed copy draws them (`fat_border_vertex_placed`).
+        out.border_error = None;
+    }
+    if source.failure.is_none() {
+        out.instance = Some(Instance {
+            shared: source.clone(),
+            transform: glam::DMat4::from_translation(share.delta),
+            error_added: share.deviation,
+        });
+    }
     out
 }
 

@@ -384,6 +384,46 @@ pub fn position(
     )
 }
 
+/// CPU twin of `fb_place` (WGSL): `p` moved by a placement given as the rows of its 3 × 4
+/// matrix (instanced parts, `render::resident::InstanceRecord::rows`).
+pub fn place(rows: &[[f32; 4]; 3], p: Vec3) -> Vec3 {
+    let h = p.extend(1.0);
+    let [x, y, z] = rows.map(|r| glam::Vec4::from(r).dot(h));
+    Vec3::new(x, y, z)
+}
+
+/// CPU twin of `fat_border_vertex_placed` (WGSL): as [`position`] for points drawn with the
+/// placement `rows` — the ring points moved first, ε raised by `eps_added`.
+pub fn position_placed(
+    points: &[BorderPoint],
+    variant: FatBorders,
+    i: usize,
+    viewer: Vec4,
+    rows: &[[f32; 4]; 3],
+    eps_added: f32,
+) -> (Vec3, usize) {
+    let (p, slot) = resolve(points, variant, i);
+    let q = point(points, p);
+    let flag = if q.info & INFO_STRAIGHT != 0 {
+        STRAIGHT_FLAG
+    } else {
+        0
+    };
+    let at = |k: usize| place(rows, Vec3::from(point(points, k).cur));
+    let (prev, next) = (neighbour(points, p, false), neighbour(points, p, true));
+    let eps = q.eps + eps_added;
+    // A placement that adds to ε (a translated copy) draws the whole ε wide.
+    let width = if eps_added == 0.0 {
+        q.info & WIDTH_MASK
+    } else {
+        0
+    };
+    (
+        expand(at(prev), at(p), at(next), viewer, eps, slot | flag | width),
+        p,
+    )
+}
+
 /// Fat-border geometry drawn by vertex pulling: every border vertex stored once
 /// ([`BorderPoint`], ring after ring, each ring followed by its closing point), the
 /// displaced vertices expanded from them in the vertex shader ([`resolve`], [`position`]),

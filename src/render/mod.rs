@@ -264,6 +264,11 @@ pub struct Renderer {
     /// The fat-border pipeline's: globals, then the border points (a storage buffer).
     border_layout: wgpu::PipelineLayout,
     points_layout: wgpu::BindGroupLayout,
+    /// Instanced parts: the placements' records (a storage buffer, group 2), and the layouts
+    /// of the placed surfaces (globals, —, records) and fat borders (globals, points, records).
+    records_layout: wgpu::BindGroupLayout,
+    placed_layout: wgpu::PipelineLayout,
+    placed_border_layout: wgpu::PipelineLayout,
     /// The fat-border index patterns ([`fat_border::pattern_indices`]) of the 6-, 4- and
     /// 2-vertex variants over [`PATTERN_POINTS`] points.
     patterns: [wgpu::Buffer; 3],
@@ -277,6 +282,10 @@ pub struct Renderer {
     /// Draw mesh-patch cuts from static per-patch buffers (default) instead of uploading
     /// their triangles with every new tessellation.
     pub static_arcs: bool,
+    /// Resident geometry draws meshes that are instances ([`crate::tessellate::Instance`]:
+    /// placements of a part's shared tessellation) as placements of the shared mesh, uploaded
+    /// once (default), instead of with geometry of their own (for comparison).
+    pub instances: bool,
     /// Triangle lists or strips for surfaces.
     pub primitives: Primitives,
     /// How strips are joined: primitive restart, except on wgpu's GL backend, where
@@ -318,22 +327,40 @@ impl Renderer {
             bind_group_layouts: &[Some(&bind_layout)],
             immediate_size: 0,
         });
-        let points_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("fat border points"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::VERTEX,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Storage { read_only: true },
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            }],
-        });
+        let storage_layout = |label| {
+            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some(label),
+                entries: &[wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::VERTEX,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Storage { read_only: true },
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                }],
+            })
+        };
+        let points_layout = storage_layout("fat border points");
+        let records_layout = storage_layout("placed records");
         let border_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("fat borders"),
             bind_group_layouts: &[Some(&bind_layout), Some(&points_layout)],
+            immediate_size: 0,
+        });
+        let placed_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("placed surfaces"),
+            bind_group_layouts: &[Some(&bind_layout), None, Some(&records_layout)],
+            immediate_size: 0,
+        });
+        let placed_border_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("placed fat borders"),
+            bind_group_layouts: &[
+                Some(&bind_layout),
+                Some(&points_layout),
+                Some(&records_layout),
+            ],
             immediate_size: 0,
         });
         if let Some(e) = pollster::block_on(scope.pop()) {
@@ -355,12 +382,16 @@ impl Renderer {
             bind_layout,
             border_layout,
             points_layout,
+            records_layout,
+            placed_layout,
+            placed_border_layout,
             patterns,
             pipelines: HashMap::new(),
             targets: HashMap::new(),
             statics: Mutex::new(HashMap::new()),
             strips: crate::strips::StripStore::new(),
             static_arcs: true,
+            instances: true,
             primitives: Primitives::default(),
             strip_join: if gpu_backend == wgpu::Backend::Gl {
                 Join::Degenerate
@@ -386,6 +417,20 @@ impl Renderer {
                 entries: &[wgpu::BindGroupEntry {
                     binding: 0,
                     resource: points.as_entire_binding(),
+                }],
+            })
+    }
+
+    /// The bind group of a buffer of placement records ([`resident::InstanceRecord`]).
+    pub(super) fn records_bind_group(&self, records: &wgpu::Buffer) -> wgpu::BindGroup {
+        self.gpu
+            .device
+            .create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("placed records"),
+                layout: &self.records_layout,
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: records.as_entire_binding(),
                 }],
             })
     }

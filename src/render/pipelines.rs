@@ -20,6 +20,11 @@ pub(super) struct Pipelines {
     pub(super) surface: wgpu::RenderPipeline,
     pub(super) surface_strip: wgpu::RenderPipeline,
     pub(super) border: wgpu::RenderPipeline,
+    /// Instanced parts: shared meshes drawn once per placement (the instance attribute is
+    /// the index of its [`super::resident::InstanceRecord`] in the records, group 2).
+    pub(super) surface_placed: wgpu::RenderPipeline,
+    pub(super) surface_strip_placed: wgpu::RenderPipeline,
+    pub(super) border_placed: wgpu::RenderPipeline,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -148,6 +153,22 @@ impl Renderer {
             step_mode: wgpu::VertexStepMode::Vertex,
             attributes: &surface_attrs,
         })];
+        let placed_attrs = wgpu::vertex_attr_array![4 => Uint32];
+        let instances = wgpu::VertexBufferLayout {
+            array_stride: 4,
+            step_mode: wgpu::VertexStepMode::Instance,
+            attributes: &placed_attrs,
+        };
+        let placed_vertex_attrs = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3];
+        let placed_surface_buffers = [
+            Some(wgpu::VertexBufferLayout {
+                array_stride: std::mem::size_of::<SurfaceVertex>() as u64,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: &placed_vertex_attrs,
+            }),
+            Some(instances.clone()),
+        ];
+        let placed_border_buffers = [Some(instances)];
         let make = |label: &str,
                     layout: &wgpu::PipelineLayout,
                     vs: &str,
@@ -216,6 +237,27 @@ impl Renderer {
             ),
             // Vertex pulling from the border points: no vertex buffers.
             border: make("fat border", &self.border_layout, "vs_border", &[], false),
+            surface_placed: make(
+                "placed surface",
+                &self.placed_layout,
+                "vs_surface_placed",
+                &placed_surface_buffers,
+                false,
+            ),
+            surface_strip_placed: make(
+                "placed surface strips",
+                &self.placed_layout,
+                "vs_surface_placed",
+                &placed_surface_buffers,
+                true,
+            ),
+            border_placed: make(
+                "placed fat border",
+                &self.placed_border_layout,
+                "vs_border_placed",
+                &placed_border_buffers,
+                false,
+            ),
         }
     }
 }

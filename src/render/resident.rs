@@ -58,18 +58,22 @@
 //! shrink; patches that left the frustum are not evicted.
 
 mod alloc;
+mod blocks;
 mod draws;
+mod instances;
 mod pool;
 
 pub use alloc::{Allocator, Move};
+pub use instances::InstanceRecord;
 
 use std::collections::HashMap;
 
 use super::pipelines::Pipelines;
 use super::upload::{SurfaceVertex, offset_indices, packed_color, strips_of, surface_vertices};
 use super::*;
-use crate::strips::RESTART;
+use blocks::strip_block;
 use draws::DrawList;
+use instances::{PlacedDraws, Slots};
 use pool::Pool;
 
 const VERTICES: usize = 0;
@@ -101,6 +105,12 @@ pub struct UploadStats {
     /// fat borders one per variant), written when the draw list was rebuilt on a device that
     /// draws indirect.
     pub args_bytes: u64,
+    /// Instanced parts: the records of the changed placed patches (64 bytes each) and the
+    /// drawn placements' record indices that changed (4 bytes each), written when the draw
+    /// list was rebuilt.
+    pub instance_bytes: u64,
+    /// Changed patches drawn as placements of a shared mesh (a record, no geometry).
+    pub placed: usize,
     /// Bytes copied on the GPU by growth and compaction.
     pub copied_bytes: u64,
     pub grown: usize,
@@ -112,7 +122,11 @@ pub struct UploadStats {
 impl UploadStats {
     /// Everything written from the CPU.
     pub fn uploaded_bytes(&self) -> u64 {
-        self.geometry_bytes + self.reindexed_bytes + self.static_bytes + self.args_bytes
+        self.geometry_bytes
+            + self.reindexed_bytes
+            + self.static_bytes
+            + self.args_bytes
+            + self.instance_bytes
     }
 }
 
@@ -125,11 +139,19 @@ pub struct ResidentMemory {
     pub capacity: [u64; STREAMS],
     /// Of which in live ranges.
     pub used: [u64; STREAMS],
+    /// Instanced parts: the placement records' buffer, and the bytes of live records.
+    pub records_capacity: u64,
+    pub records_used: u64,
 }
 
 impl ResidentMemory {
     pub fn capacity_total(&self) -> u64 {
-        self.capacity.iter().sum()
+        self.capacity.iter().sum::<u64>() + self.records_capacity
+    }
+
+    /// Bytes in live ranges and records.
+    pub fn used_total(&self) -> u64 {
+        self.used.iter().sum::<u64>() + self.records_used
     }
 }
 
@@ -144,6 +166,11 @@ struct Slot {
     strips: Option<Arc<Vec<u32>>>,
     /// Drawn from its hierarchy's static buffers (only the fat borders are resident).
     is_static: bool,
+    /// A placed patch: the key of its shared mesh's slot, and where its record is.
+    instance_of: Option<usize>,
+    record_at: Option<u64>,
+    /// A shared mesh's slot: the placed patches using it.
+    users: usize,
 }
 
 /// One patch's geometry on the CPU, indices local to the patch.
@@ -235,37 +262,6 @@ fn fragmented(a: &Allocator) -> bool {
     a.free() * 4 >= a.capacity() && a.free_ranges() > 64 && a.largest_free() * 2 < a.free()
 }
 
-/// A patch's strips as a block that concatenates with its neighbours' (see the module doc).
-fn strip_block(local: &[u32], join: Join) -> Vec<u32> {
-    match join {
-        Join::Restart => {
-            let mut b = Vec::with_capacity(local.len() + 1);
-            b.extend_from_slice(local);
-            if !b.is_empty() {
-                b.push(RESTART);
-            }
-            b
-        }
-        Join::Degenerate => {
-            let joined = crate::strips::join_degenerate(local, &mut []);
-            let (Some(&first), Some(&last)) = (joined.first(), joined.last()) else {
-                return Vec::new();
-            };
-            // first, first: the window from the previous block's last index is zero-area
-            // and the strip starts at an even index; last (twice when odd): so is the
-            // window into the next block, which starts at an even index again.
-            let mut b = Vec::with_capacity(joined.len() + 4);
-            b.extend([first, first]);
-            b.extend_from_slice(&joined);
-            b.push(last);
-            if b.len() % 2 == 1 {
-                b.push(last);
-            }
-            b
-        }
-    }
-}
-
 /// A fault to inject (tests prove they can fail with it).
 #[doc(hidden)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -274,6 +270,8 @@ pub enum Fault {
     None,
     /// Every update leaves the first changed patch's slot as it was (a stale slot).
     KeepFirstStale,
+    /// Placed patches are drawn without their placement (identity records).
+    UnplacedInstances,
 }
 
 /// One buffer per stream; a patch's streams all live in one arena.
@@ -340,15 +338,18 @@ impl Arena {
 pub struct ResidentGeometry {
     device: wgpu::Device,
     /// The renderer settings the slots were built with (primitives, strip join, static arcs).
-    config: (Primitives, Join, bool),
+    config: (Primitives, Join, bool, bool),
     arenas: Vec<Arena>,
-    slots: Vec<Slot>,
+    slots: Slots,
     generation: Option<u64>,
     /// The patches of the last update (scene indices, in order).
     drawn: Vec<usize>,
     draws: DrawList,
     /// Indirect arguments of the draw list.
     args: Option<wgpu::Buffer>,
+    /// The draws of the placed patches (instanced parts).
+    placed: PlacedDraws,
+
     #[doc(hidden)]
     pub fault: Fault,
     /// Largest bytes of one pool's buffer (tests: many arenas on a small scene); `None`:
@@ -366,13 +367,15 @@ impl ResidentGeometry {
                 renderer.primitives,
                 renderer.strip_join,
                 renderer.static_arcs,
+                renderer.instances,
             ),
             arenas: Vec::new(),
-            slots: Vec::new(),
+            slots: Slots::default(),
             generation: None,
             drawn: Vec::new(),
             draws: DrawList::default(),
             args: None,
+            placed: PlacedDraws::default(),
             fault: Fault::None,
             arena_bytes: None,
         }
@@ -398,6 +401,7 @@ impl ResidentGeometry {
                 m.used[p] += pool.alloc.used() * pool.unit;
             }
         }
+        (m.records_capacity, m.records_used) = self.placed.records_memory();
         m
     }
 
@@ -416,6 +420,7 @@ impl ResidentGeometry {
             renderer.primitives,
             renderer.strip_join,
             renderer.static_arcs,
+            renderer.instances,
         );
         if self.device != renderer.gpu.device || self.config != config {
             self.reset(renderer);
@@ -427,9 +432,9 @@ impl ResidentGeometry {
         self.generation = Some(generation);
         let drawn: Vec<(usize, &Arc<PatchMesh>)> = meshes.into_iter().collect();
         if let Some(max) = drawn.iter().map(|d| d.0 + 1).max()
-            && max > self.slots.len()
+            && max > self.slots.patches.len()
         {
-            self.slots.resize(max, Slot::default());
+            self.slots.patches.resize(max, Slot::default());
         }
         let mut changed: Vec<(usize, &Arc<PatchMesh>)> = drawn
             .iter()
@@ -446,10 +451,17 @@ impl ResidentGeometry {
         }
         if !changed.is_empty() {
             renderer.strips.begin_upload();
+            let changed = match self.attach_instances(renderer, changed, &mut stats) {
+                Ok(c) => c,
+                Err(e) => {
+                    self.reset(renderer);
+                    return Err(e);
+                }
+            };
             for batch in changed.chunks(BATCH) {
                 let built: Vec<Built> = batch
                     .par_iter()
-                    .map(|&(i, m)| Built::new(renderer, i, m, None, false))
+                    .map(|(i, m)| Built::new(renderer, *i, m, None, false))
                     .collect();
                 stats.patches += built.len();
                 if let Err(e) = self.place(renderer, built, &mut stats) {
@@ -648,7 +660,7 @@ impl ResidentGeometry {
         stats.copied_bytes += copied;
         stats.compactions += 1;
         let to: HashMap<u64, u64> = moves.iter().map(|m| (m.from, m.to)).collect();
-        for (i, slot) in self.slots.iter_mut().enumerate() {
+        for (i, slot) in self.slots.iter_mut() {
             if slot.arena == a
                 && let Some((start, len)) = slot.ranges[p]
                 && let Some(&new) = to.get(&start)
@@ -715,6 +727,8 @@ impl ResidentGeometry {
         stats.rebuilt = true;
         d.write_args(renderer, &mut self.args, stats);
         self.draws = d;
+        self.placed.collect(&self.slots, drawn);
+        self.placed.write(renderer, stats);
     }
 
     /// Merged draws of the current draw list (all streams, static ranges included).
@@ -744,55 +758,7 @@ impl ResidentGeometry {
             &self.arenas,
             self.args.as_ref().filter(|_| indirect),
             variant,
+            &self.placed,
         );
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn degenerate_blocks_concatenate_with_every_strip_at_an_even_index() {
-        // Two patches' strips, each two strips joined by a restart.
-        let a = strip_block(&[0, 1, 2, 3, 4, RESTART, 5, 6, 7], Join::Degenerate);
-        let b = strip_block(&[10, 11, 12, RESTART, 13, 14, 15, 16], Join::Degenerate);
-        assert_eq!(a.len() % 2, 0);
-        assert_eq!(b.len() % 2, 0);
-        let merged: Vec<u32> = a.iter().chain(&b).copied().collect();
-        // Triangles with their strip orientation (odd positions swap the first two).
-        let tris = |s: &[u32]| -> Vec<[u32; 3]> {
-            s.windows(3)
-                .enumerate()
-                .map(|(k, w)| {
-                    if k % 2 == 0 {
-                        [w[0], w[1], w[2]]
-                    } else {
-                        [w[1], w[0], w[2]]
-                    }
-                })
-                .filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
-                .collect()
-        };
-        let alone = |local: &[u32]| {
-            let mut out = Vec::new();
-            for s in local.split(|&i| i == RESTART) {
-                out.extend(tris(s));
-            }
-            out
-        };
-        let mut want = alone(&[0, 1, 2, 3, 4, RESTART, 5, 6, 7]);
-        want.extend(alone(&[10, 11, 12, RESTART, 13, 14, 15, 16]));
-        assert_eq!(tris(&merged), want);
-    }
-
-    #[test]
-    fn restart_blocks_end_in_a_restart() {
-        assert_eq!(
-            strip_block(&[0, 1, 2], Join::Restart),
-            vec![0, 1, 2, RESTART]
-        );
-        assert!(strip_block(&[], Join::Restart).is_empty());
-        assert!(strip_block(&[], Join::Degenerate).is_empty());
     }
 }

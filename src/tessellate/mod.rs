@@ -50,6 +50,39 @@ pub struct PatchMesh {
     /// hierarchy's triangles, which the renderer draws from index buffers built once per
     /// patch (`triangles` holds the same triangles for CPU work).
     pub arcs: Option<CutRanges>,
+    /// This mesh is a placement of a tessellation other patches share (instanced parts,
+    /// `lod::shared`): the renderer may draw the shared mesh with the placement instead.
+    pub instance: Option<Instance>,
+}
+
+/// A mesh that is `shared` moved by `transform`: vertex for vertex what [`placed`] (or a
+/// translation) makes of it, up to f32 rounding, with its own patch id and colour and its
+/// error raised by `error_added` (world units). Only similarities (rotation, reflection,
+/// uniform scale, translation: [`is_similarity`]) are instances, so lengths scale evenly,
+/// normals turn with the transform and the shared mesh's errors are already the placement's
+/// ([`shared_surface`] keys on the scale).
+#[derive(Clone, Debug)]
+pub struct Instance {
+    pub shared: std::sync::Arc<PatchMesh>,
+    pub transform: glam::DMat4,
+    pub error_added: f64,
+}
+
+/// Whether `m` is affine and a similarity: orthogonal axes of one length (within 1e-9
+/// relative), no projective part.
+pub fn is_similarity(m: &glam::DMat4) -> bool {
+    let [x, y, z] = [m.x_axis, m.y_axis, m.z_axis].map(|a| a.truncate());
+    let l = x.length();
+    let tol = 1e-9 * l * l;
+    let finite = m.to_cols_array().iter().all(|v| v.is_finite());
+    finite
+        && l > 0.0
+        && m.row(3) == glam::DVec4::new(0.0, 0.0, 0.0, 1.0)
+        && (y.length_squared() - l * l).abs() <= tol
+        && (z.length_squared() - l * l).abs() <= tol
+        && x.dot(y).abs() <= tol
+        && x.dot(z).abs() <= tol
+        && y.dot(z).abs() <= tol
 }
 
 /// A cut as ranges `[first, count]` of its patch's [`crate::mt::MtHierarchy::triangles`].
@@ -185,6 +218,7 @@ impl Tessellators {
         out.trim_error = 0.0;
         out.border_error = None;
         out.arcs = None;
+        out.instance = None;
         match &patch.surface {
             PatchSurface::Bezier(b) => self.bezier.tessellate(b, eps, out),
             PatchSurface::Mesh(m) => mesh_patch(m, eps, shared_borders, cut, out),
@@ -286,13 +320,21 @@ pub fn shared_surface(patch: &Patch) -> Option<(usize, u64)> {
 
 /// A copy of `unplaced` (from [`Tessellators::unplaced`] on a patch with the same
 /// [`shared_surface`]) moved to `patch`'s placement, with its id and colour: exactly what
-/// [`Tessellators::patch`] makes for `patch`.
-pub fn placed(unplaced: &PatchMesh, patch: &Patch) -> PatchMesh {
-    let mut out = unplaced.clone();
+/// [`Tessellators::patch`] makes for `patch`. Marked as an [`Instance`] of `unplaced` when
+/// the placement is a similarity.
+pub fn placed(unplaced: &std::sync::Arc<PatchMesh>, patch: &Patch) -> PatchMesh {
+    let mut out = PatchMesh::clone(unplaced);
     out.patch_id = patch.id;
     out.color = patch.color;
     if out.failure.is_none() {
         place(&mut out, patch);
+        if is_similarity(&patch.transform) {
+            out.instance = Some(Instance {
+                shared: unplaced.clone(),
+                transform: patch.transform,
+                error_added: 0.0,
+            });
+        }
     }
     out
 }

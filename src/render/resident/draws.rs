@@ -45,7 +45,7 @@ impl DrawList {
     /// The merged draws of the slots `drawn`, no arguments yet.
     pub(super) fn collect(
         renderer: &Renderer,
-        slots: &[Slot],
+        slots: &Slots,
         drawn: &[usize],
         stats: &mut UploadStats,
     ) -> DrawList {
@@ -160,7 +160,9 @@ impl DrawList {
         }
     }
 
-    /// Records the draws of `variant` into `pass` (indirect from `args` when given).
+    /// Records the draws of `variant` into `pass` (indirect from `args` when given), with
+    /// the placed patches' after the others of each kind (surfaces, fat borders).
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn encode(
         &self,
         pass: &mut wgpu::RenderPass<'_>,
@@ -169,6 +171,7 @@ impl DrawList {
         arenas: &[Arena],
         args: Option<&wgpu::Buffer>,
         variant: FatBorders,
+        placed: &PlacedDraws,
     ) {
         for (p, pipeline) in [(LIST, &pipes.surface), (STRIPS, &pipes.surface_strip)] {
             if self.ranges[p].is_empty() {
@@ -200,9 +203,26 @@ impl DrawList {
             args.map(|a| (a, self.statics_first_arg)),
             &self.static_ranges,
         );
+        placed.encode_surfaces(pass, pipes, arenas);
         let Some(v) = FatBorders::ALL_ON.iter().position(|&x| x == variant) else {
             return;
         };
+        self.encode_borders(pass, pipes, patterns, arenas, args, variant, v);
+        placed.encode_borders(pass, pipes, &patterns[v], arenas, variant);
+    }
+
+    /// Records the fat-border draws of `variant` (pattern `v`) of the patches' own points.
+    #[allow(clippy::too_many_arguments)]
+    fn encode_borders(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        pipes: &Pipelines,
+        patterns: &[wgpu::Buffer; 3],
+        arenas: &[Arena],
+        args: Option<&wgpu::Buffer>,
+        variant: FatBorders,
+        v: usize,
+    ) {
         if self.ranges[POINTS].is_empty() {
             return;
         }

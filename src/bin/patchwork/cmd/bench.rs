@@ -81,6 +81,10 @@ pub struct BenchArgs {
     /// comparison).
     #[arg(long)]
     no_instancing: bool,
+    /// Draw each placement of an instanced part with GPU geometry of its own (world-space
+    /// copies; tessellations still shared) instead of its part's shared mesh (for comparison).
+    #[arg(long)]
+    world_copies: bool,
     /// Mesh patches: upload every new cut's triangles instead of drawing index ranges of
     /// static per-patch buffers (for comparison).
     #[arg(long)]
@@ -129,6 +133,7 @@ pub fn run(args: &BenchArgs) -> Result<bool, CliError> {
     let scene = load_built(file, &args.cache)?;
     let mut renderer = Renderer::new()?;
     renderer.static_arcs = !args.upload_cuts;
+    renderer.instances = !args.world_copies;
     renderer.primitives = args.primitives.primitives;
     if let Some(join) = args.strip_joins {
         renderer.strip_join = join;
@@ -192,7 +197,10 @@ pub fn run(args: &BenchArgs) -> Result<bool, CliError> {
             "shared_patches": summary.instancing.shared_patches,
             "made": summary.instancing.made,
             "saved": summary.instancing.saved,
+            "shared_meshes": summary.shared_meshes,
+            "placed_patches": summary.placed_patches,
         },
+        "resident_bytes": summary.resident_bytes,
         "crack_pixels": {
             "total": summary.total_crack_pixels,
             "max": summary.max_crack_pixels,
@@ -266,6 +274,12 @@ pub fn run(args: &BenchArgs) -> Result<bool, CliError> {
             scene.patches.len(),
             inst.made,
             inst.saved
+        );
+        data!(
+            "instanced on the GPU      {} patches drawn as placements of {} shared meshes; resident geometry {}",
+            summary.placed_patches,
+            summary.shared_meshes,
+            mib(summary.resident_bytes as f64)
         );
     }
     if let (Some(max), Some(total)) = (summary.max_crack_pixels, summary.total_crack_pixels) {
