@@ -21,10 +21,13 @@ fn caught_panics_never_reach_the_panic_hook() {
     for entry in std::fs::read_dir(&dir).expect("regression inputs") {
         let path = entry.expect("entry").path();
         let bytes = std::fs::read(&path).expect("readable");
-        // Each is a ruststep panic on a number (overflow): an error, quietly.
         let r = patchwork::io::step::read(&bytes, &path);
-        assert!(r.is_err(), "{}: read", path.display());
-        read += 1;
+        let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
+        if name.starts_with("ruststep_") {
+            // A ruststep panic on a number (overflow): an error, quietly.
+            assert!(r.is_err(), "{}: read", path.display());
+            read += 1;
+        }
     }
     assert!(read >= 2, "{read} inputs");
     assert_eq!(
