@@ -362,6 +362,20 @@ pub fn position(
     i: usize,
     viewer: Vec4,
 ) -> (Vec3, usize) {
+    pulled(points, variant, i, viewer, |p| p, 0.0)
+}
+
+/// Vertex `i` of `variant`'s draw expanded from ring points moved by `moved`, ε raised by
+/// `eps_added` (a placement that adds to ε — a translated copy — draws the whole ε wide):
+/// [`position`] and [`position_placed`].
+fn pulled(
+    points: &[BorderPoint],
+    variant: FatBorders,
+    i: usize,
+    viewer: Vec4,
+    moved: impl Fn(Vec3) -> Vec3,
+    eps_added: f32,
+) -> (Vec3, usize) {
     let (p, slot) = resolve(points, variant, i);
     let q = point(points, p);
     let flag = if q.info & INFO_STRAIGHT != 0 {
@@ -369,17 +383,16 @@ pub fn position(
     } else {
         0
     };
-    let at = |k: usize| Vec3::from(point(points, k).cur);
+    let width = if eps_added == 0.0 {
+        q.info & WIDTH_MASK
+    } else {
+        0
+    };
+    let at = |k: usize| moved(Vec3::from(point(points, k).cur));
     let (prev, next) = (neighbour(points, p, false), neighbour(points, p, true));
+    let eps = q.eps + eps_added;
     (
-        expand(
-            at(prev),
-            at(p),
-            at(next),
-            viewer,
-            q.eps,
-            slot | flag | (q.info & WIDTH_MASK),
-        ),
+        expand(at(prev), at(p), at(next), viewer, eps, slot | flag | width),
         p,
     )
 }
@@ -402,26 +415,7 @@ pub fn position_placed(
     rows: &[[f32; 4]; 3],
     eps_added: f32,
 ) -> (Vec3, usize) {
-    let (p, slot) = resolve(points, variant, i);
-    let q = point(points, p);
-    let flag = if q.info & INFO_STRAIGHT != 0 {
-        STRAIGHT_FLAG
-    } else {
-        0
-    };
-    let at = |k: usize| place(rows, Vec3::from(point(points, k).cur));
-    let (prev, next) = (neighbour(points, p, false), neighbour(points, p, true));
-    let eps = q.eps + eps_added;
-    // A placement that adds to ε (a translated copy) draws the whole ε wide.
-    let width = if eps_added == 0.0 {
-        q.info & WIDTH_MASK
-    } else {
-        0
-    };
-    (
-        expand(at(prev), at(p), at(next), viewer, eps, slot | flag | width),
-        p,
-    )
+    pulled(points, variant, i, viewer, |p| place(rows, p), eps_added)
 }
 
 /// Fat-border geometry drawn by vertex pulling: every border vertex stored once

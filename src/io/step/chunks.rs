@@ -25,11 +25,12 @@ const MIN_CHUNK: usize = 64 * 1024;
 pub fn entity_instances(text: &str) -> Result<Vec<EntityInstance>, String> {
     // Only the exchange structure our scanner read (and checked: `bspline_check`): instances
     // after `END-ISO-10303-21;` (a second file appended, say) never reach ruststep and truck.
-    let text = match statements(text).last() {
+    let statements = statements(text);
+    let text = match statements.last() {
         Some(&(end, _)) if end == END => &text[..span(text, end).1],
         _ => text,
     };
-    let chunks = chunks(text, rayon::current_num_threads() * 4);
+    let chunks = chunks(text, &statements, rayon::current_num_threads() * 4);
     let parsed: Option<Vec<Vec<EntityInstance>>> = chunks
         .par_iter()
         .map(|c| {
@@ -56,9 +57,9 @@ pub fn whole_file(text: &str) -> Result<Vec<EntityInstance>, String> {
 
 /// Runs of consecutive entity instances (`#id = …;`), cut into about `parts` chunks of whole
 /// instances (none smaller than [`MIN_CHUNK`] unless a run is); a chunk never spans a
-/// statement that is not an instance (`ENDSEC;`, `DATA;`).
-fn chunks(text: &str, parts: usize) -> Vec<&str> {
-    let statements = statements(text);
+/// statement that is not an instance (`ENDSEC;`, `DATA;`). `statements` are `text`'s
+/// ([`statements`]).
+fn chunks<'a>(text: &'a str, statements: &[(&'a str, bool)], parts: usize) -> Vec<&'a str> {
     let instance_bytes: usize = statements.iter().filter(|s| s.1).map(|s| s.0.len()).sum();
     let target = (instance_bytes / parts.max(1)).max(MIN_CHUNK);
     let mut out = Vec::new();
@@ -176,7 +177,7 @@ mod tests {
     #[test]
     fn chunks_hold_whole_instances_and_parse_as_the_whole_file() {
         // One chunk per instance run (MIN_CHUNK is far above this file), cut at ENDSEC.
-        let c = chunks(FILE, 8);
+        let c = chunks(FILE, &statements(FILE), 8);
         assert_eq!(c.len(), 2, "{c:?}");
         assert!(
             c[0].starts_with("#1=") && c[0].ends_with("C('x;'));"),
