@@ -74,3 +74,45 @@ fn a_glb_header_of_4_gib_is_refused_without_allocating() {
         .expect_err("refused");
     assert!(matches!(e, LoadError::Unreadable { .. }), "{e}");
 }
+
+/// truck-stepio resolves references recursively: an edge curve that is its own `curve_3d`
+/// overflowed the stack (an abort, exit 134, that no isolation catches). Found by the `step`
+/// fuzz target's SIGSEGV; the cycle is now refused on our own scan, naming where it closes.
+#[test]
+fn a_reference_cycle_is_refused_before_truck_follows_it() {
+    let msg = load_error("step/hostile/surface_curve_cycle.step");
+    assert!(
+        msg.contains("#68996: refused: its references run in a cycle (through #69003)"),
+        "{msg}"
+    );
+}
+
+/// The same recursion on a chain of 5 000 nested surface curves, made here from the cycle
+/// file: refused by height, whatever thread converts the face.
+#[test]
+fn a_reference_chain_thousands_deep_is_refused() {
+    let text = std::fs::read_to_string(data("step/hostile/surface_curve_cycle.step")).unwrap();
+    let n = 5000;
+    let mut chain = String::new();
+    for i in 0..n {
+        let (id, next) = (if i == 0 { 69003 } else { 900_000 + i }, 900_001 + i);
+        chain += &format!("#{id} = SURFACE_CURVE('',#{next},(#{next}),.CURVE_3D.);\n");
+    }
+    chain += &format!("#{} = LINE('',#69002,#950001);\n", 900_000 + n);
+    chain += "#950001 = VECTOR('',#950002,1.);\n#950002 = DIRECTION('',(1.,0.,0.));";
+    let cycle = "#69003 = SURFACE_CURVE('',#69003,(#69003),.CURVE_3D.);";
+    assert!(text.contains(cycle));
+    let path = common::scratch("hostile").join("deep_chain.step");
+    std::fs::write(&path, text.replace(cycle, &chain)).unwrap();
+    let options = LoadOptions::new(Hierarchies::CachedOrOriginal, None);
+    let msg = prep::load_with_options(&path, &options, &patchwork::util::NoProgress)
+        .map(|_| ())
+        .expect_err("refused")
+        .to_string();
+    // face → bound → loop → oriented edge → edge curve → 5 000 curves → line → vector →
+    // direction.
+    assert!(
+        msg.contains("#68996: refused: its references nest 5007 deep (the limit is 64)"),
+        "{msg}"
+    );
+}

@@ -15,21 +15,15 @@ use rayon::prelude::*;
 use truck_stepio::r#in::ruststep;
 use truck_stepio::r#in::ruststep::ast::EntityInstance;
 
-/// The statement that ends an exchange structure.
-const END: &str = "END-ISO-10303-21;";
-
 /// Smallest chunk worth a task, bytes.
 const MIN_CHUNK: usize = 64 * 1024;
 
-/// The entity instances of every `DATA` section, in file order (see the module doc).
+/// The entity instances of every `DATA` section, in file order (see the module doc). `text`
+/// must be only what our scanner read ([`super::p21::P21File::end`]): what follows
+/// `END-ISO-10303-21;` (a second file appended, say) was not checked and must never reach
+/// ruststep and truck.
 pub fn entity_instances(text: &str) -> Result<Vec<EntityInstance>, String> {
-    // Only the exchange structure our scanner read (and checked: `bspline_check`): instances
-    // after `END-ISO-10303-21;` (a second file appended, say) never reach ruststep and truck.
     let statements = statements(text);
-    let text = match statements.last() {
-        Some(&(end, _)) if end == END => &text[..span(text, end).1],
-        _ => text,
-    };
     let chunks = chunks(text, &statements, rayon::current_num_threads() * 4);
     let parsed: Option<Vec<Vec<EntityInstance>>> = chunks
         .par_iter()
@@ -129,10 +123,6 @@ fn statements(text: &str) -> Vec<(&str, bool)> {
                 let s = start.take().unwrap_or(i);
                 let statement = &text[s..=i];
                 out.push((statement, statement.starts_with('#')));
-                if statement == END {
-                    // Our scanner reads nothing after the end either.
-                    break;
-                }
             }
             c if c.is_ascii_whitespace() => {}
             _ => {

@@ -16,6 +16,7 @@
 mod bspline_check;
 mod chunks;
 pub mod p21;
+mod ref_check;
 pub mod structure;
 
 use std::collections::{BTreeMap, HashMap};
@@ -100,7 +101,9 @@ pub fn read_with(
 
     // truck's view of the same data section (parsed in parallel, see `chunks`).
     // ruststep's parser panics on some values our scanner accepts (an exponent past i64).
-    let instances = isolated(|| chunks::entity_instances(&text))
+    // Only the text our scanner read and checked (`file.end`): the two parsers may disagree
+    // on where the exchange structure ends (`END-ISO-10303-21 ;` with a space, say).
+    let instances = isolated(|| chunks::entity_instances(&text[..file.end]))
         .unwrap_or_else(|panic| Err(format!("its parser failed ({panic})")))
         .map_err(|e| LoadError::Unreadable {
             path: p(),
@@ -108,16 +111,35 @@ pub fn read_with(
         })?;
     // B-splines whose knots truck would expand without bound, or whose control points are
     // not references (ruststep panics on them), are not given to truck at all.
-    let refused = bspline_check::refused(&file);
+    let mut refused = bspline_check::refused(&file);
+    // Reference cycles and very deep chains overflow truck's recursive resolution (an abort).
+    let tangled = ref_check::refused(&file);
     let mut table = Table::default();
     let mut unreadable: BTreeMap<String, usize> = BTreeMap::new();
+    let mut unseen = 0usize;
     for inst in &instances {
         use truck_stepio::r#in::ruststep::ast::EntityInstance;
         let (id, name) = match inst {
             EntityInstance::Simple { id, record } => (*id, record.name.clone()),
             EntityInstance::Complex { id, .. } => (*id, "complex entity".to_owned()),
         };
-        if refused.contains_key(&id) {
+        if refused.contains_key(&id) || tangled.contains_key(&id) {
+            continue;
+        }
+        // Only what our scanner read and checked, as it read it: an instance the two parsers
+        // see differently is not given to truck (its faces are skipped, naming it).
+        let ours = file.get(id);
+        let same = match (inst, ours) {
+            (EntityInstance::Simple { record, .. }, Some(e)) => {
+                !e.is_complex()
+                    && e.record()
+                        .is_some_and(|r| r.name.eq_ignore_ascii_case(&record.name))
+            }
+            (EntityInstance::Complex { .. }, Some(e)) => e.is_complex(),
+            (_, None) => false,
+        };
+        if !same {
+            unseen += 1;
             continue;
         }
         // ruststep panics ("Invalid key while deserializing PlaceHolder") where a value of
@@ -150,6 +172,19 @@ pub fn read_with(
             if refused.len() > 1 { "; …" } else { "" }
         ));
     }
+    if unseen > 0 {
+        warnings.push(format!(
+            "{unseen} entity instances truck-stepio's parser read differently from ours were ignored"
+        ));
+    }
+    if let Some((id, reason)) = tangled.iter().next() {
+        warnings.push(format!(
+            "{} entities not read, their faces not drawn (#{id}: {reason}{})",
+            tangled.len(),
+            if tangled.len() > 1 { "; …" } else { "" }
+        ));
+    }
+    refused.extend(tangled);
     if !unreadable.is_empty() {
         let list: Vec<String> = unreadable
             .iter()
@@ -213,7 +248,14 @@ pub fn read_with(
     let converted: Vec<(u64, Result<TrimmedFace, String>)> = jobs
         .into_iter()
         .zip(results)
-        .map(|(f, (r, _))| (f, r.map_err(|e| name_refusals(e, &refused))))
+        .map(|(f, (r, _))| {
+            let r = r.map_err(|e| match refused.get(&f) {
+                // The face itself was not given to truck (it reaches a reference cycle).
+                Some(why) => format!("refused: {why}"),
+                None => name_refusals(e, &refused),
+            });
+            (f, r)
+        })
         .collect();
 
     if !loose.is_empty() {
@@ -239,13 +281,26 @@ pub fn read_with(
 
 /// A face's failure that is truck's lookup of an entity we refused, with our reason instead.
 fn name_refusals(reason: String, refused: &BTreeMap<u64, String>) -> String {
-    for (id, why) in refused.iter().take(64) {
-        let lookup = format!("Lookup failed for #{id}");
-        if reason.contains(&lookup) {
-            return reason.replace(&lookup, &format!("#{id} refused: {why}"));
-        }
+    const LOOKUP: &str = "Lookup failed for #";
+    let Some(at) = reason.find(LOOKUP) else {
+        return reason;
+    };
+    let digits = &reason[at + LOOKUP.len()..];
+    let end = digits
+        .find(|c: char| !c.is_ascii_digit())
+        .unwrap_or(digits.len());
+    match digits[..end]
+        .parse::<u64>()
+        .ok()
+        .and_then(|id| refused.get(&id).map(|w| (id, w)))
+    {
+        Some((id, why)) => reason.replacen(
+            &format!("{LOOKUP}{id}"),
+            &format!("#{id} refused: {why}"),
+            1,
+        ),
+        None => reason,
     }
-    reason
 }
 
 /// Gives every `AXIS2_PLACEMENT_3D` without a usable reference direction (`$`, or parallel to

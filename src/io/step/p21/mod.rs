@@ -52,6 +52,9 @@ pub struct P21File {
     pub header: Vec<Record>,
     /// Entity instances of all `DATA` sections, in file order.
     pub entities: Vec<Entity>,
+    /// Byte offset in the text just after the last statement read (`END-ISO-10303-21;`, or
+    /// the end of the text): what follows was not read, and must not reach another parser.
+    pub end: usize,
     /// Entity id → index into `entities`.
     index: HashMap<u64, usize>,
 }

@@ -24,6 +24,7 @@ impl<'a> Parser<'a> {
         let mut file = P21File::default();
         let mut seen_data = false;
         loop {
+            file.end = self.pos;
             self.skip_ws()?;
             if self.pos >= self.b.len() {
                 break;
@@ -51,6 +52,7 @@ impl<'a> Parser<'a> {
                 }
                 "END-ISO-10303-21" => {
                     self.end_of_record()?;
+                    file.end = self.pos;
                     break;
                 }
                 _ => {
