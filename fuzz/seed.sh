@@ -19,3 +19,14 @@ seed gltf tests/data/mesh/*.gltf tests/data/mesh/*.glb tests/data/bad/*.gltf tes
 seed obj tests/data/mesh/*.obj tests/data/bad/*.obj tests/data/fuzz/obj/*
 seed ply tests/data/mesh/*.ply tests/data/bad/*.ply tests/data/fuzz/ply/*
 seed stl tests/data/mesh/*.stl tests/data/bad/*.stl tests/data/fuzz/stl/*
+seed iges tests/data/iges/*.igs tests/data/iges/*.iges models/corpus/example_45_faces.iges tests/data/fuzz/iges/*
+# trimmed: the first byte picks the reader (even STEP, odd IGES) and the tolerance.
+mkdir -p fuzz/corpus/trimmed
+for f in tests/data/step/*.step models/screw.step tests/data/fuzz/trimmed/*; do
+  [ -f "$f" ] && [ "$(stat -c %s "$f")" -le 200000 ] || continue
+  { printf '\x02'; cat "$f"; } > "fuzz/corpus/trimmed/s-$(basename "$f")"
+done
+for f in tests/data/iges/*.igs tests/data/iges/*.iges models/corpus/example_45_faces.iges; do
+  [ -f "$f" ] && [ "$(stat -c %s "$f")" -le 200000 ] || continue
+  { printf '\x03'; cat "$f"; } > "fuzz/corpus/trimmed/i-$(basename "$f")"
+done

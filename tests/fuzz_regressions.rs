@@ -8,8 +8,8 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use patchwork::io::{bpt, mesh, step, stl};
-use patchwork::tessellate::{BezierTessellator, MAX_SEGMENTS, PatchMesh};
+use patchwork::io::{bpt, iges, mesh, step, stl};
+use patchwork::tessellate::{BezierTessellator, MAX_SEGMENTS, PatchMesh, Tessellators};
 
 /// What each target does with one input (as in `fuzz/fuzz_targets/<target>.rs`).
 fn run(target: &str, data: &[u8]) {
@@ -51,6 +51,41 @@ fn run(target: &str, data: &[u8]) {
                 assert!(out.triangles.len() <= 2 * (MAX_SEGMENTS as usize).pow(2));
             }
         }
+        "iges" => drop(iges::read(data, &p("fuzz.iges"))),
+        "trimmed" => {
+            let Some((&first, rest)) = data.split_first() else {
+                return;
+            };
+            let model = if first & 1 == 0 {
+                step::read(rest, &p("fuzz.step"))
+            } else {
+                iges::read(rest, &p("fuzz.iges"))
+            };
+            let Ok(model) = model else {
+                return;
+            };
+            let Ok(scene) = patchwork::prep::step::assemble(model, &patchwork::util::NoProgress)
+            else {
+                return;
+            };
+            let relative = 10f64.powf(-f64::from((first >> 1) % 4) - 1.0);
+            let eps = relative * scene.bounds.radius.max(1e-300);
+            let mut t = Tessellators::new();
+            let mut out = PatchMesh::default();
+            for patch in scene.patches.iter().take(8) {
+                t.patch(patch, eps, &mut out);
+                if out.failure.is_none() {
+                    assert!(
+                        out.error.is_finite(),
+                        "face {}: error {}",
+                        patch.id,
+                        out.error
+                    );
+                    let n = out.positions.len();
+                    assert!(out.triangles.iter().flatten().all(|&i| (i as usize) < n));
+                }
+            }
+        }
         other => panic!("tests/data/fuzz/{other}: no such fuzz target"),
     }
 }
@@ -64,15 +99,21 @@ fn files(dir: &Path) -> Vec<PathBuf> {
     out
 }
 
-fn replay(target: &str, inputs: &[PathBuf]) -> usize {
+/// Runs `target` on each input, `prefix` put before its bytes (the tolerance byte of the
+/// tessellator targets).
+fn replay_with(target: &str, prefix: &[u8], inputs: &[PathBuf]) -> usize {
     for path in inputs {
-        let data = std::fs::read(path).expect("read input");
+        let data = [prefix, &std::fs::read(path).expect("read input")].concat();
         let outcome = patchwork::isolate::isolated(|| run(target, &data));
         if let Err(panic) = outcome {
             panic!("{target}: {}: {panic}", path.display());
         }
     }
     inputs.len()
+}
+
+fn replay(target: &str, inputs: &[PathBuf]) -> usize {
+    replay_with(target, &[], inputs)
 }
 
 #[test]
@@ -126,5 +167,10 @@ fn the_targets_seed_inputs_end_without_a_panic() {
     );
     n += replay("step_p21", &by_ext("step/hostile", "step"));
     n += replay("step", &by_ext("step/hostile", "step"));
+    let iges_inputs = by_ext("iges", "igs");
+    n += replay("iges", &iges_inputs);
+    // The trimmed target's first byte: 2 = STEP at 10⁻² of the size, 3 = IGES.
+    n += replay_with("trimmed", &[2], &by_ext("step", "step"));
+    n += replay_with("trimmed", &[3], &iges_inputs);
     assert!(n >= 30, "only {n} seed inputs found");
 }
