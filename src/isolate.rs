@@ -26,8 +26,15 @@ fn install_hook() {
 
 /// Runs `f`, turning a panic into `Err(message)`.
 ///
-/// This catches unwinding panics only; an abort (e.g. out of memory) still ends the process,
-/// which is why the benchmark runs truck's own mesher in a child process.
+/// This catches unwinding panics only; an abort (e.g. out of memory, a stack overflow) still
+/// ends the process, which is why the benchmark runs truck's own mesher in a child process
+/// and the STEP reader refuses reference cycles before truck follows them.
+///
+/// Quiet only on the calling thread: a panic on a rayon worker that `f` waits for is carried
+/// back and caught here, but the panic hook has already run on the worker (libFuzzer's hook
+/// aborts there). Code that may panic inside a parallel loop is isolated per item on its
+/// worker (the STEP chunk parse, face conversion and probing, trimmed tessellation); the one
+/// isolated call with parallel work inside, `drive::scale`'s frames, wants the message.
 pub fn isolated<T>(f: impl FnOnce() -> T) -> Result<T, String> {
     install_hook();
     QUIET.with(|q| q.set(q.get() + 1));
