@@ -32,7 +32,12 @@ use std::collections::VecDeque;
 
 use glam::{DVec2, DVec3, Vec3};
 use spade::handles::FixedVertexHandle;
-use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation};
+use spade::{ConstrainedDelaunayTriangulation, HierarchyHintGenerator, Point2, Triangulation};
+
+/// The triangulation: a point-location hierarchy finds where each point goes in O(log n)
+/// steps whatever the insertion order (the default walk from the last point inserted is
+/// linear on a scrambled order).
+type Cdt = ConstrainedDelaunayTriangulation<Point2<f64>, (), (), (), HierarchyHintGenerator<f64>>;
 
 use super::{PatchMesh, Resolution};
 use crate::model::poles::{LoopPoint, expand_poles};
@@ -40,8 +45,10 @@ use crate::model::trimmed::{
     Interval, LoopEdge, SurfaceEval, TrimmedFace, TruckSurface, parameter_bounds,
 };
 
+mod domain;
 mod loops;
 
+use domain::Domain;
 use loops::*;
 
 /// Most segments one edge polyline may have.
@@ -178,20 +185,27 @@ impl TrimmedTessellator {
             return Err(TrimError::EmptyDomain);
         }
         let segs = segments(&loops);
+        let domain = Domain::new(&segs);
 
         // 4: constrained Delaunay in scaled parameter space.
-        let mut cdt: ConstrainedDelaunayTriangulation<Point2<f64>> =
-            ConstrainedDelaunayTriangulation::new();
+        let mut cdt = Cdt::new();
         self.uvs.clear();
         self.pos.clear();
-        let mut border_ids: Vec<Vec<u32>> = Vec::with_capacity(loops.len());
-        for lp in &loops {
-            let mut ids = Vec::with_capacity(lp.len());
-            for b in lp {
-                let h = self.insert(&mut cdt, scale, b.uv, Some(b.p), s)?;
-                ids.push(h.index() as u32);
-            }
-            border_ids.push(ids);
+        // Border points in a scrambled order: inserted one after the other along a long,
+        // nearly straight trim curve, every insertion flipped edges back along the whole
+        // curve (quadratic: 7 600 points of a fuzzed face took 100 s inside spade). A fixed
+        // permutation keeps the mesh reproducible.
+        let mut border_ids: Vec<Vec<u32>> = loops.iter().map(|l| vec![0; l.len()]).collect();
+        let order: Vec<(usize, usize)> = loops
+            .iter()
+            .enumerate()
+            .flat_map(|(li, l)| (0..l.len()).map(move |k| (li, k)))
+            .collect();
+        for i in scrambled(order.len()) {
+            let (li, k) = order[i];
+            let b = loops[li][k];
+            let h = self.insert(&mut cdt, scale, b.uv, Some(b.p), s)?;
+            border_ids[li][k] = h.index() as u32;
         }
         for ids in &border_ids {
             for k in 0..ids.len() {
@@ -224,7 +238,7 @@ impl TrimmedTessellator {
                         continue;
                     }
                     let uv = DVec2::new(lo.x + i as f64 * du, lo.y + j as f64 * dv);
-                    if inside(&segs, uv) {
+                    if domain.contains(uv) {
                         self.insert(&mut cdt, scale, uv, None, s)?;
                     }
                 }
@@ -243,7 +257,7 @@ impl TrimmedTessellator {
         let vertex_cap = (16 * self.uvs.len() + 20_000).min(MAX_VERTICES);
         for _round in 0..=REFINE_ROUNDS {
             tris.clear();
-            let inside_faces = self.inside_faces(&cdt, &segs, use_parity);
+            let inside_faces = self.inside_faces(&cdt, &domain, use_parity);
             let mut worst = 0.0f64;
             let mut to_insert = Vec::new();
             for t in inside_faces {
@@ -314,7 +328,7 @@ impl TrimmedTessellator {
     /// Inserts a parameter point (3D position given for border points, else evaluated).
     fn insert(
         &mut self,
-        cdt: &mut ConstrainedDelaunayTriangulation<Point2<f64>>,
+        cdt: &mut Cdt,
         scale: DVec2,
         uv: DVec2,
         p: Option<DVec3>,
@@ -338,12 +352,7 @@ impl TrimmedTessellator {
     }
 
     /// Triangles of the CDT inside the domain, as vertex indices.
-    fn inside_faces(
-        &self,
-        cdt: &ConstrainedDelaunayTriangulation<Point2<f64>>,
-        segs: &[(DVec2, DVec2)],
-        use_parity: bool,
-    ) -> Vec<[u32; 3]> {
+    fn inside_faces(&self, cdt: &Cdt, domain: &Domain<'_>, use_parity: bool) -> Vec<[u32; 3]> {
         let tri_of = |f: spade::handles::FaceHandle<'_, spade::handles::InnerTag, _, _, _, _>| {
             let v = f.vertices();
             [
@@ -361,7 +370,7 @@ impl TrimmedTessellator {
                         + self.uvs[t[1] as usize]
                         + self.uvs[t[2] as usize])
                         / 3.0;
-                    inside(segs, c)
+                    domain.contains(c)
                 })
                 .map(tri_of)
                 .collect();
@@ -534,18 +543,6 @@ fn segments(loops: &[Vec<BPoint>]) -> Vec<(DVec2, DVec2)> {
 }
 
 /// Even-odd point-in-polygon over all loop segments.
-fn inside(segs: &[(DVec2, DVec2)], p: DVec2) -> bool {
-    let mut c = false;
-    for &(a, b) in segs {
-        if (a.y > p.y) != (b.y > p.y) {
-            let x = a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x);
-            if p.x < x {
-                c = !c;
-            }
-        }
-    }
-    c
-}
 
 /// Grid cells (nu × nv over the box from `lo`) that a border segment passes through.
 fn border_cells(
@@ -571,6 +568,24 @@ fn border_cells(
         }
     }
     near
+}
+
+/// A fixed permutation of `0..n` that spreads consecutive indices apart (a multiplicative
+/// step coprime with `n`, near n·(√5 − 1)/2): points along a curve come in an order close
+/// to random for Delaunay insertion, the same on every run.
+fn scrambled(n: usize) -> impl Iterator<Item = usize> {
+    let mut step = ((n as f64) * 0.618_033_988_75) as usize | 1;
+    while n > 1 && gcd(step, n) != 1 {
+        step += 2;
+    }
+    (0..n).map(move |i| (i * step) % n.max(1))
+}
+
+fn gcd(mut a: usize, mut b: usize) -> usize {
+    while b != 0 {
+        (a, b) = (b, a % b);
+    }
+    a
 }
 
 /// Parameter scaling (mean speeds) and grid steps for tolerance `eps` over the box.
