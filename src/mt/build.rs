@@ -71,6 +71,17 @@ pub(super) fn samples(a: DVec3, b: DVec3, c: DVec3) -> [DVec3; 7] {
     ]
 }
 
+/// A sphere around a triangle: its centroid and the distance to the farthest corner (the
+/// triangle is the convex hull of its corners, so no point of it is farther).
+fn sphere([a, b, c]: [DVec3; 3]) -> (DVec3, f64) {
+    let centre = (a + b + c) / 3.0;
+    let radius = [a, b, c]
+        .iter()
+        .map(|p| p.distance(centre))
+        .fold(0.0, f64::max);
+    (centre, radius)
+}
+
 impl MtHierarchy {
     /// Builds the hierarchy of a patch (`positions`, `triangles`), collapsing until no valid
     /// collapse is left.
@@ -87,6 +98,11 @@ struct Builder {
     node_error: Vec<f64>,
     /// Original triangles each live triangle stands for.
     covers: Vec<Vec<u32>>,
+    /// Every triangle's corners, and a sphere around it (centroid, radius): distances are
+    /// measured without looking up vertices, and a sphere far from a point skips the exact
+    /// distance (see [`Builder::beyond`]).
+    corners: Vec<[DVec3; 3]>,
+    spheres: Vec<(DVec3, f64)>,
     /// Live triangles around each vertex.
     around: Vec<Vec<u32>>,
     quadric: Vec<Quadric>,
@@ -146,7 +162,14 @@ impl Builder {
             }
         }
         let m = triangles.len();
+        let corners: Vec<[DVec3; 3]> = triangles
+            .iter()
+            .map(|t| t.map(|i| pos[i as usize]))
+            .collect();
+        let spheres = corners.iter().map(|&c| sphere(c)).collect();
         Builder {
+            corners,
+            spheres,
             pos,
             tris: triangles.to_vec(),
             created_by: vec![0; m],
@@ -307,36 +330,53 @@ impl Builder {
         }
         let mut touched = std::mem::take(&mut self.scratch_vertices);
         let mut edges = std::mem::take(&mut self.scratch_edges);
+        // Candidates refused when popped, listed at both ends: a collapse that changes the
+        // triangles around either end pushes them again (they may be allowed now).
+        let mut refused: Vec<Vec<(u32, u32)>> = vec![Vec::new(); self.pos.len()];
         while let Some(c) = heap.pop() {
             if c.stamp != (self.stamp[c.from as usize], self.stamp[c.to as usize]) {
                 continue;
             }
-            // Current stamps: the cost holds, the neighbourhoods are as they were when it was
-            // pushed; now the checks left for later.
+            // Current stamps: the cost and the border rules hold; now the checks left for
+            // later, on the neighbourhoods as they are.
             if !self.allowed(c.from, c.to) {
+                refused[c.from as usize].push((c.from, c.to));
+                refused[c.to as usize].push((c.from, c.to));
                 continue;
             }
+            // The border neighbour of `from` that `to` takes over: its border rules change.
+            let other = self.border[c.from as usize]
+                .as_ref()
+                .and_then(|nb| nb.iter().copied().find(|&x| x != c.to));
             self.collapse(c.from, c.to);
+            // Costs change only at `to` (its quadric grew) and border rules only at `to` and
+            // `other`: their stamps retire every candidate they are in, which are pushed
+            // again. The triangles around `to` and its neighbours changed, so candidates
+            // refused there get another chance; every other candidate in the heap stands.
+            edges.clear();
+            for w in [Some(c.to), other].into_iter().flatten() {
+                self.stamp[w as usize] += 1;
+                touched.clear();
+                self.neighbours_into(w, &mut touched);
+                edges.extend(touched.iter().flat_map(|&x| [(w, x), (x, w)]));
+            }
+            self.stamp[c.from as usize] += 1;
             touched.clear();
             self.neighbours_into(c.to, &mut touched);
             touched.push(c.to);
             for &w in &touched {
-                self.stamp[w as usize] += 1;
-            }
-            // Every edge at a touched vertex, once, both directions.
-            edges.clear();
-            for &w in &touched {
-                around.clear();
-                self.neighbours_into(w, &mut around);
-                edges.extend(around.iter().map(|&x| (w.min(x), w.max(x))));
+                edges.append(&mut refused[w as usize]);
             }
             edges.sort_unstable();
             edges.dedup();
-            for &(a, b) in &edges {
-                for (x, y) in [(a, b), (b, a)] {
-                    if let Some(c) = self.candidate(x, y) {
-                        heap.push(c);
-                    }
+            for &(x, y) in &edges {
+                if self.vertex_removed_by[x as usize] != NEVER
+                    || self.vertex_removed_by[y as usize] != NEVER
+                {
+                    continue;
+                }
+                if let Some(c) = self.candidate(x, y) {
+                    heap.push(c);
                 }
             }
         }
@@ -378,6 +418,9 @@ impl Builder {
             let new = tri.map(|i| if i == from { to } else { i });
             let id = self.tris.len() as u32;
             self.tris.push(new);
+            let corners = new.map(|i| self.pos[i as usize]);
+            self.corners.push(corners);
+            self.spheres.push(sphere(corners));
             self.created_by.push(node);
             self.removed_by.push(NEVER);
             self.covers.push(Vec::new());
@@ -411,8 +454,17 @@ impl Builder {
     }
 
     fn dist(&self, p: DVec3, t: u32) -> f64 {
-        let [a, b, c] = self.tris[t as usize].map(|i| self.pos[i as usize]);
+        let [a, b, c] = self.corners[t as usize];
         point_triangle_distance(p, a, b, c)
+    }
+
+    /// Whether triangle `t` is certainly farther than `d` from `p` (its bounding sphere is):
+    /// then `dist(p, t)` cannot lower a minimum that is `d` already. The margin (relative
+    /// 1e-9) keeps rounding from skipping a triangle at the same distance.
+    fn beyond(&self, p: DVec3, t: u32, d: f64) -> bool {
+        let (centre, radius) = self.spheres[t as usize];
+        let reach = (d + radius) * (1.0 + 1e-9);
+        p.distance_squared(centre) > reach * reach
     }
 
     /// Sampled two-sided Hausdorff distance between the triangles `fan` and the original
@@ -427,10 +479,13 @@ impl Builder {
     fn measure(&mut self, fan: &[u32], region: &[u32]) -> f64 {
         let mut worst = 0.0f64;
         for &o in region {
-            let [a, b, c] = self.tris[o as usize].map(|i| self.pos[i as usize]);
+            let [a, b, c] = self.corners[o as usize];
             let centroid = (a + b + c) / 3.0;
             let mut nearest: Option<(u32, f64)> = None;
             for &t in fan {
+                if nearest.is_some_and(|(_, best)| self.beyond(centroid, t, best)) {
+                    continue;
+                }
                 let d = self.dist(centroid, t);
                 if nearest.is_none_or(|(_, best)| d.total_cmp(&best).is_lt()) {
                     nearest = Some((t, d));
@@ -445,6 +500,9 @@ impl Builder {
             for s in &samples(a, b, c)[..6] {
                 let mut best = f64::INFINITY;
                 for &t in fan {
+                    if self.beyond(*s, t, best) {
+                        continue;
+                    }
                     best = best.min(self.dist(*s, t));
                     if best <= worst {
                         break;
@@ -461,7 +519,7 @@ impl Builder {
         edges.clear();
         for &t in fan {
             let tri = self.tris[t as usize];
-            let [a, b, c] = tri.map(|i| self.pos[i as usize]);
+            let [a, b, c] = self.corners[t as usize];
             let mut todo = [true; 7];
             for k in 0..3 {
                 todo[k] = self.mark[tri[k] as usize] != g;
@@ -476,6 +534,9 @@ impl Builder {
             for (s, _) in samples(a, b, c).into_iter().zip(todo).filter(|x| x.1) {
                 let mut best = f64::INFINITY;
                 for &o in own.iter().chain(region) {
+                    if self.beyond(s, o, best) {
+                        continue;
+                    }
                     best = best.min(self.dist(s, o));
                     if best <= worst {
                         break;
