@@ -71,6 +71,13 @@ pub(super) fn samples(a: DVec3, b: DVec3, c: DVec3) -> [DVec3; 7] {
     ]
 }
 
+/// Whether every point of the sphere `(centre, radius)` is farther than `d` from `p`, with a
+/// margin (relative 1e-9) that keeps rounding from skipping a triangle at the same distance.
+fn outside(p: DVec3, (centre, radius): (DVec3, f64), d: f64) -> bool {
+    let reach = (d + radius) * (1.0 + 1e-9);
+    p.distance_squared(centre) > reach * reach
+}
+
 /// A sphere around a triangle: its centroid and the distance to the farthest corner (the
 /// triangle is the convex hull of its corners, so no point of it is farther).
 fn sphere([a, b, c]: [DVec3; 3]) -> (DVec3, f64) {
@@ -103,6 +110,8 @@ struct Builder {
     /// distance (see [`Builder::beyond`]).
     corners: Vec<[DVec3; 3]>,
     spheres: Vec<(DVec3, f64)>,
+    /// A sphere around the original triangles each triangle covers (all of them).
+    cover_spheres: Vec<(DVec3, f64)>,
     /// Live triangles around each vertex.
     around: Vec<Vec<u32>>,
     quadric: Vec<Quadric>,
@@ -119,6 +128,19 @@ struct Builder {
     scratch_vertices: Vec<u32>,
     scratch_edges: Vec<(u32, u32)>,
     fan_edges: Vec<(u32, u32)>,
+    scratch_removed: Vec<u32>,
+    scratch_fan: Vec<u32>,
+    scratch_region: Vec<u32>,
+    scratch_groups: Vec<Group>,
+    scratch_assigned: Vec<u32>,
+}
+
+/// The originals a removed triangle covered, `region[start..end]`, and a sphere around them.
+#[derive(Clone, Copy, Debug)]
+struct Group {
+    start: u32,
+    end: u32,
+    sphere: (DVec3, f64),
 }
 
 impl Builder {
@@ -166,9 +188,10 @@ impl Builder {
             .iter()
             .map(|t| t.map(|i| pos[i as usize]))
             .collect();
-        let spheres = corners.iter().map(|&c| sphere(c)).collect();
+        let spheres: Vec<(DVec3, f64)> = corners.iter().map(|&c| sphere(c)).collect();
         Builder {
             corners,
+            cover_spheres: spheres.clone(),
             spheres,
             pos,
             tris: triangles.to_vec(),
@@ -187,6 +210,11 @@ impl Builder {
             scratch_vertices: Vec::new(),
             scratch_edges: Vec::new(),
             fan_edges: Vec::new(),
+            scratch_removed: Vec::new(),
+            scratch_fan: Vec::new(),
+            scratch_region: Vec::new(),
+            scratch_groups: Vec::new(),
+            scratch_assigned: Vec::new(),
         }
     }
 
@@ -396,20 +424,31 @@ impl Builder {
     /// Moves `from` onto `to`: one node of the hierarchy.
     fn collapse(&mut self, from: u32, to: u32) {
         let node = self.node_error.len() as u32;
-        let removed: Vec<u32> = self.around[from as usize].clone();
+        let mut removed = std::mem::take(&mut self.scratch_removed);
+        removed.clone_from(&self.around[from as usize]);
         self.vertex_removed_by[from as usize] = node;
         self.vertex_target[from as usize] = to;
-        let mut region: Vec<u32> = Vec::new();
+        let mut region = std::mem::take(&mut self.scratch_region);
+        let mut groups = std::mem::take(&mut self.scratch_groups);
+        region.clear();
+        groups.clear();
         let mut inherited = 0.0f64;
         for &t in &removed {
             self.removed_by[t as usize] = node;
             inherited = inherited.max(self.node_error[self.created_by[t as usize] as usize]);
+            let start = region.len() as u32;
             region.append(&mut self.covers[t as usize]);
+            groups.push(Group {
+                start,
+                end: region.len() as u32,
+                sphere: self.cover_spheres[t as usize],
+            });
             for v in self.tris[t as usize] {
                 self.around[v as usize].retain(|&x| x != t);
             }
         }
-        let mut fan = Vec::new();
+        let mut fan = std::mem::take(&mut self.scratch_fan);
+        fan.clear();
         for &t in &removed {
             let tri = self.tris[t as usize];
             if tri.contains(&to) {
@@ -421,6 +460,8 @@ impl Builder {
             let corners = new.map(|i| self.pos[i as usize]);
             self.corners.push(corners);
             self.spheres.push(sphere(corners));
+            // Set when the fan's covers are known (`measure`).
+            self.cover_spheres.push(sphere(corners));
             self.created_by.push(node);
             self.removed_by.push(NEVER);
             self.covers.push(Vec::new());
@@ -449,8 +490,24 @@ impl Builder {
                 }
             }
         }
-        let error = self.measure(&fan, &region);
+        let error = self.measure(&fan, &region, &groups);
         self.node_error.push(error.max(inherited));
+        for &t in &fan {
+            let centre = self.spheres[t as usize].0;
+            let radius = self.covers[t as usize]
+                .iter()
+                .map(|&o| {
+                    let (c, r) = self.spheres[o as usize];
+                    c.distance(centre) + r
+                })
+                .fold(0.0, f64::max);
+            // Rounding margin: the sphere must hold every covered point.
+            self.cover_spheres[t as usize] = (centre, radius * (1.0 + 1e-12));
+        }
+        self.scratch_removed = removed;
+        self.scratch_region = region;
+        self.scratch_groups = groups;
+        self.scratch_fan = fan;
     }
 
     fn dist(&self, p: DVec3, t: u32) -> f64 {
@@ -462,22 +519,27 @@ impl Builder {
     /// then `dist(p, t)` cannot lower a minimum that is `d` already. The margin (relative
     /// 1e-9) keeps rounding from skipping a triangle at the same distance.
     fn beyond(&self, p: DVec3, t: u32, d: f64) -> bool {
-        let (centre, radius) = self.spheres[t as usize];
-        let reach = (d + radius) * (1.0 + 1e-9);
-        p.distance_squared(centre) > reach * reach
+        outside(p, self.spheres[t as usize], d)
     }
 
     /// Sampled two-sided Hausdorff distance between the triangles `fan` and the original
     /// triangles `region` (every triangle sampled at [`samples`]), assigning every original
     /// triangle to the fan triangle nearest its centroid (the first of equally near ones).
     ///
-    /// Exact for those samples, and fast: a sample stops scanning as soon as it finds a
-    /// triangle no farther than the worst distance so far (it cannot raise the maximum); an
-    /// original triangle whose three corners are within the worst distance of its assigned
-    /// fan triangle is not sampled further (distance to one triangle is convex, so the whole
-    /// triangle is that near); a fan triangle's samples look at its assigned originals first.
-    fn measure(&mut self, fan: &[u32], region: &[u32]) -> f64 {
+    /// Exact for those samples, and fast. The outcome, the largest over all samples of the
+    /// distance to the other set, does not depend on the order the samples are visited in,
+    /// so the cheap ones go first and raise `worst` early: the centroids (their distance
+    /// comes with the assignment), then the fan's samples, then the rest of the originals'.
+    /// A sample stops scanning as soon as it finds a triangle no farther than `worst` (it
+    /// cannot raise the maximum), looking first where that is likely (an original's assigned
+    /// fan triangle, a fan triangle's assigned originals); a triangle or a group of originals
+    /// whose bounding sphere is beyond the nearest so far is skipped; an original triangle
+    /// whose three corners are within `worst` of its assigned fan triangle is not sampled
+    /// further (distance to one triangle is convex, so the whole triangle is that near).
+    fn measure(&mut self, fan: &[u32], region: &[u32], groups: &[Group]) -> f64 {
         let mut worst = 0.0f64;
+        let mut assigned = std::mem::take(&mut self.scratch_assigned);
+        assigned.clear();
         for &o in region {
             let [a, b, c] = self.corners[o as usize];
             let centroid = (a + b + c) / 3.0;
@@ -491,28 +553,46 @@ impl Builder {
                     nearest = Some((t, d));
                 }
             }
-            let Some((at, d)) = nearest else { continue };
+            let Some((at, d)) = nearest else {
+                assigned.push(NEVER);
+                continue;
+            };
             self.covers[at as usize].push(o);
+            assigned.push(at);
             worst = worst.max(d);
+        }
+        worst = self.measure_fan(fan, region, groups, worst);
+        for (&o, &at) in region.iter().zip(&assigned) {
+            if at == NEVER {
+                continue;
+            }
+            let [a, b, c] = self.corners[o as usize];
             if [a, b, c].iter().all(|&v| self.dist(v, at) <= worst) {
                 continue;
             }
             for s in &samples(a, b, c)[..6] {
-                let mut best = f64::INFINITY;
-                for &t in fan {
-                    if self.beyond(*s, t, best) {
-                        continue;
-                    }
-                    best = best.min(self.dist(*s, t));
-                    if best <= worst {
-                        break;
+                let mut best = self.dist(*s, at);
+                if best > worst {
+                    for &t in fan {
+                        if t == at || self.beyond(*s, t, best) {
+                            continue;
+                        }
+                        best = best.min(self.dist(*s, t));
+                        if best <= worst {
+                            break;
+                        }
                     }
                 }
-                if best.is_finite() {
-                    worst = worst.max(best);
-                }
+                worst = worst.max(best);
             }
         }
+        self.scratch_assigned = assigned;
+        worst
+    }
+
+    /// The fan → region half of [`Builder::measure`]: the largest of `worst` and the distance
+    /// from every sample of the fan to the original triangles of `region`.
+    fn measure_fan(&mut self, fan: &[u32], region: &[u32], groups: &[Group], mut worst: f64) -> f64 {
         // Fan → region; corners and edges the fan triangles share are sampled once.
         let g = self.next_generation();
         let mut edges = std::mem::take(&mut self.fan_edges);
@@ -532,14 +612,30 @@ impl Builder {
             }
             let own = &self.covers[t as usize];
             for (s, _) in samples(a, b, c).into_iter().zip(todo).filter(|x| x.1) {
+                // Its own originals first, then the region's groups of originals, a group
+                // skipped whole when its sphere is beyond the nearest so far. The outcome,
+                // max(worst, nearest) — unchanged once a triangle within `worst` is found —
+                // does not depend on the order.
                 let mut best = f64::INFINITY;
-                for &o in own.iter().chain(region) {
-                    if self.beyond(s, o, best) {
-                        continue;
+                let scan = |list: &[u32], best: &mut f64| {
+                    for &o in list {
+                        if self.beyond(s, o, *best) {
+                            continue;
+                        }
+                        *best = best.min(self.dist(s, o));
+                        if *best <= worst {
+                            return true;
+                        }
                     }
-                    best = best.min(self.dist(s, o));
-                    if best <= worst {
-                        break;
+                    false
+                };
+                if !scan(own, &mut best) {
+                    for g in groups {
+                        if !outside(s, g.sphere, best)
+                            && scan(&region[g.start as usize..g.end as usize], &mut best)
+                        {
+                            break;
+                        }
                     }
                 }
                 if best.is_finite() {
