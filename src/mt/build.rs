@@ -133,6 +133,8 @@ struct Builder {
     scratch_region: Vec<u32>,
     scratch_groups: Vec<Group>,
     scratch_assigned: Vec<u32>,
+    /// Emptied cover lists of removed triangles, reused by new ones.
+    spare_covers: Vec<Vec<u32>>,
 }
 
 /// The originals a removed triangle covered, `region[start..end]`, and a sphere around them.
@@ -215,6 +217,7 @@ impl Builder {
             scratch_region: Vec::new(),
             scratch_groups: Vec::new(),
             scratch_assigned: Vec::new(),
+            spare_covers: Vec::new(),
         }
     }
 
@@ -345,17 +348,18 @@ impl Builder {
     }
 
     fn run(mut self) -> MtHierarchy {
-        let mut heap = BinaryHeap::new();
+        let mut first = Vec::new();
         let mut around = Vec::new();
         for v in 0..self.pos.len() as u32 {
             around.clear();
             self.neighbours_into(v, &mut around);
             for &w in &around {
                 if let Some(c) = self.candidate(v, w) {
-                    heap.push(c);
+                    first.push(c);
                 }
             }
         }
+        let mut heap = BinaryHeap::from(first);
         let mut touched = std::mem::take(&mut self.scratch_vertices);
         let mut edges = std::mem::take(&mut self.scratch_edges);
         // Candidates refused when popped, listed at both ends: a collapse that changes the
@@ -438,6 +442,9 @@ impl Builder {
             inherited = inherited.max(self.node_error[self.created_by[t as usize] as usize]);
             let start = region.len() as u32;
             region.append(&mut self.covers[t as usize]);
+            // The emptied list keeps its capacity for a triangle of the fan.
+            let emptied = std::mem::take(&mut self.covers[t as usize]);
+            self.spare_covers.push(emptied);
             groups.push(Group {
                 start,
                 end: region.len() as u32,
@@ -464,7 +471,7 @@ impl Builder {
             self.cover_spheres.push(sphere(corners));
             self.created_by.push(node);
             self.removed_by.push(NEVER);
-            self.covers.push(Vec::new());
+            self.covers.push(self.spare_covers.pop().unwrap_or_default());
             for v in new {
                 self.around[v as usize].push(id);
             }
@@ -562,16 +569,28 @@ impl Builder {
             worst = worst.max(d);
         }
         worst = self.measure_fan(fan, region, groups, worst);
+        // A corner shared by several originals is one sample: visited once.
+        let g = self.next_generation();
         for (&o, &at) in region.iter().zip(&assigned) {
             if at == NEVER {
                 continue;
             }
             let [a, b, c] = self.corners[o as usize];
-            if [a, b, c].iter().all(|&v| self.dist(v, at) <= worst) {
+            let near = [a, b, c].map(|v| self.dist(v, at));
+            if near.iter().all(|&d| d <= worst) {
                 continue;
             }
-            for s in &samples(a, b, c)[..6] {
-                let mut best = self.dist(*s, at);
+            let tri = self.tris[o as usize];
+            for (k, s) in samples(a, b, c)[..6].iter().enumerate() {
+                let mut best = if k < 3 {
+                    if self.mark[tri[k] as usize] == g {
+                        continue;
+                    }
+                    self.mark[tri[k] as usize] = g;
+                    near[k]
+                } else {
+                    self.dist(*s, at)
+                };
                 if best > worst {
                     for &t in fan {
                         if t == at || self.beyond(*s, t, best) {
