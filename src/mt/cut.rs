@@ -13,8 +13,9 @@ impl MtHierarchy {
     /// Whether triangle `t` is in the cut for error `eps`.
     pub fn in_cut(&self, t: usize, eps: f64) -> bool {
         let made = self.node_error[self.created_by[t] as usize];
+        // A triangle never removed stays in every cut it is created in, ε = ∞ included.
         let gone = match self.removed_by[t] {
-            NEVER => f64::INFINITY,
+            NEVER => return made <= eps,
             n => self.node_error[n as usize],
         };
         made <= eps && gone > eps
