@@ -471,7 +471,8 @@ impl Builder {
             self.cover_spheres.push(sphere(corners));
             self.created_by.push(node);
             self.removed_by.push(NEVER);
-            self.covers.push(self.spare_covers.pop().unwrap_or_default());
+            self.covers
+                .push(self.spare_covers.pop().unwrap_or_default());
             for v in new {
                 self.around[v as usize].push(id);
             }
@@ -611,7 +612,13 @@ impl Builder {
 
     /// The fan → region half of [`Builder::measure`]: the largest of `worst` and the distance
     /// from every sample of the fan to the original triangles of `region`.
-    fn measure_fan(&mut self, fan: &[u32], region: &[u32], groups: &[Group], mut worst: f64) -> f64 {
+    fn measure_fan(
+        &mut self,
+        fan: &[u32],
+        region: &[u32],
+        groups: &[Group],
+        mut worst: f64,
+    ) -> f64 {
         // Fan → region; corners and edges the fan triangles share are sampled once.
         let g = self.next_generation();
         let mut edges = std::mem::take(&mut self.fan_edges);

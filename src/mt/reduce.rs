@@ -402,8 +402,7 @@ impl Reducer {
         self.succ[c as usize].remove(r);
         self.pred[r as usize].remove(c);
         // Arcs into c now go into r.
-        let preds: Vec<u32> = std::mem::take(&mut self.pred[c as usize])
-            .0;
+        let preds: Vec<u32> = std::mem::take(&mut self.pred[c as usize]).0;
         for x in preds {
             if let Some(arc) = self.arcs.remove(&(x, c)) {
                 for &t in &arc.tris {

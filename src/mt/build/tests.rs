@@ -1,6 +1,8 @@
 //! Tests of the MT build (`super`): monotone errors, cuts as triangulations within their
 //! error, and node errors that bound a dense Hausdorff measurement.
 
+// Test code throughout: the architecture check (stages, printing) reads up to here.
+#[cfg(test)]
 use super::super::fixtures::{bumpy, dense_hausdorff, edges_used, sampled_hausdorff};
 use super::*;
 use crate::model::mesh::border_loops;
@@ -193,7 +195,10 @@ fn halved_node_errors_fail_the_dense_check() {
     }
     let halved = MtHierarchy::from_parts(parts, pos.len()).expect("still a valid hierarchy");
     let ratio = worst_dense_ratio(&halved, &pos, &m.triangles, 8);
-    assert!(ratio > 1.2, "halved errors pass the dense check ({ratio:.3} ε)");
+    assert!(
+        ratio > 1.2,
+        "halved errors pass the dense check ({ratio:.3} ε)"
+    );
 }
 
 /// Samples leave gaps: measured densely on real scanned geometry (four patches of 200
@@ -231,14 +236,12 @@ fn bunny_patches_hold_a_dense_hausdorff_bound() {
         let halved = MtHierarchy::from_parts(parts, pos.len()).expect("a valid hierarchy");
         halved_worst = halved_worst.max(worst_dense_ratio(&halved, &pos, &p.triangles, 6));
     }
-    eprintln!("halved errors: dense Hausdorff {halved_worst:.4} ε");
     assert!(worst <= BUNNY_SHORTFALL, "dense Hausdorff {worst:.4} ε");
     assert!(
         halved_worst > BUNNY_SHORTFALL * 1.2,
         "halved errors pass ({halved_worst:.3} ε)"
     );
 }
-
 
 /// The build stops only when no valid collapse is left: on the coarsest cut, rebuilt as a
 /// fresh mesh, every candidate is refused (a candidate refused once and never retried after
