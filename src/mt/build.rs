@@ -71,6 +71,24 @@ pub(super) fn samples(a: DVec3, b: DVec3, c: DVec3) -> [DVec3; 7] {
     ]
 }
 
+/// Whether every point of the sphere `(centre, radius)` is farther than `d` from `p`, with a
+/// margin (relative 1e-9) that keeps rounding from skipping a triangle at the same distance.
+fn outside(p: DVec3, (centre, radius): (DVec3, f64), d: f64) -> bool {
+    let reach = (d + radius) * (1.0 + 1e-9);
+    p.distance_squared(centre) > reach * reach
+}
+
+/// A sphere around a triangle: its centroid and the distance to the farthest corner (the
+/// triangle is the convex hull of its corners, so no point of it is farther).
+fn sphere([a, b, c]: [DVec3; 3]) -> (DVec3, f64) {
+    let centre = (a + b + c) / 3.0;
+    let radius = [a, b, c]
+        .iter()
+        .map(|p| p.distance(centre))
+        .fold(0.0, f64::max);
+    (centre, radius)
+}
+
 impl MtHierarchy {
     /// Builds the hierarchy of a patch (`positions`, `triangles`), collapsing until no valid
     /// collapse is left.
@@ -87,6 +105,13 @@ struct Builder {
     node_error: Vec<f64>,
     /// Original triangles each live triangle stands for.
     covers: Vec<Vec<u32>>,
+    /// Every triangle's corners, and a sphere around it (centroid, radius): distances are
+    /// measured without looking up vertices, and a sphere far from a point skips the exact
+    /// distance (see [`Builder::beyond`]).
+    corners: Vec<[DVec3; 3]>,
+    spheres: Vec<(DVec3, f64)>,
+    /// A sphere around the original triangles each triangle covers (all of them).
+    cover_spheres: Vec<(DVec3, f64)>,
     /// Live triangles around each vertex.
     around: Vec<Vec<u32>>,
     quadric: Vec<Quadric>,
@@ -103,6 +128,21 @@ struct Builder {
     scratch_vertices: Vec<u32>,
     scratch_edges: Vec<(u32, u32)>,
     fan_edges: Vec<(u32, u32)>,
+    scratch_removed: Vec<u32>,
+    scratch_fan: Vec<u32>,
+    scratch_region: Vec<u32>,
+    scratch_groups: Vec<Group>,
+    scratch_assigned: Vec<u32>,
+    /// Emptied cover lists of removed triangles, reused by new ones.
+    spare_covers: Vec<Vec<u32>>,
+}
+
+/// The originals a removed triangle covered, `region[start..end]`, and a sphere around them.
+#[derive(Clone, Copy, Debug)]
+struct Group {
+    start: u32,
+    end: u32,
+    sphere: (DVec3, f64),
 }
 
 impl Builder {
@@ -146,7 +186,15 @@ impl Builder {
             }
         }
         let m = triangles.len();
+        let corners: Vec<[DVec3; 3]> = triangles
+            .iter()
+            .map(|t| t.map(|i| pos[i as usize]))
+            .collect();
+        let spheres: Vec<(DVec3, f64)> = corners.iter().map(|&c| sphere(c)).collect();
         Builder {
+            corners,
+            cover_spheres: spheres.clone(),
+            spheres,
             pos,
             tris: triangles.to_vec(),
             created_by: vec![0; m],
@@ -164,6 +212,12 @@ impl Builder {
             scratch_vertices: Vec::new(),
             scratch_edges: Vec::new(),
             fan_edges: Vec::new(),
+            scratch_removed: Vec::new(),
+            scratch_fan: Vec::new(),
+            scratch_region: Vec::new(),
+            scratch_groups: Vec::new(),
+            scratch_assigned: Vec::new(),
+            spare_covers: Vec::new(),
         }
     }
 
@@ -294,49 +348,67 @@ impl Builder {
     }
 
     fn run(mut self) -> MtHierarchy {
-        let mut heap = BinaryHeap::new();
+        let mut first = Vec::new();
         let mut around = Vec::new();
         for v in 0..self.pos.len() as u32 {
             around.clear();
             self.neighbours_into(v, &mut around);
             for &w in &around {
                 if let Some(c) = self.candidate(v, w) {
-                    heap.push(c);
+                    first.push(c);
                 }
             }
         }
+        let mut heap = BinaryHeap::from(first);
         let mut touched = std::mem::take(&mut self.scratch_vertices);
         let mut edges = std::mem::take(&mut self.scratch_edges);
+        // Candidates refused when popped, listed at both ends: a collapse that changes the
+        // triangles around either end pushes them again (they may be allowed now).
+        let mut refused: Vec<Vec<(u32, u32)>> = vec![Vec::new(); self.pos.len()];
         while let Some(c) = heap.pop() {
             if c.stamp != (self.stamp[c.from as usize], self.stamp[c.to as usize]) {
                 continue;
             }
-            // Current stamps: the cost holds, the neighbourhoods are as they were when it was
-            // pushed; now the checks left for later.
+            // Current stamps: the cost and the border rules hold; now the checks left for
+            // later, on the neighbourhoods as they are.
             if !self.allowed(c.from, c.to) {
+                refused[c.from as usize].push((c.from, c.to));
+                refused[c.to as usize].push((c.from, c.to));
                 continue;
             }
+            // The border neighbour of `from` that `to` takes over: its border rules change.
+            let other = self.border[c.from as usize]
+                .as_ref()
+                .and_then(|nb| nb.iter().copied().find(|&x| x != c.to));
             self.collapse(c.from, c.to);
+            // Costs change only at `to` (its quadric grew) and border rules only at `to` and
+            // `other`: their stamps retire every candidate they are in, which are pushed
+            // again. The triangles around `to` and its neighbours changed, so candidates
+            // refused there get another chance; every other candidate in the heap stands.
+            edges.clear();
+            for w in [Some(c.to), other].into_iter().flatten() {
+                self.stamp[w as usize] += 1;
+                touched.clear();
+                self.neighbours_into(w, &mut touched);
+                edges.extend(touched.iter().flat_map(|&x| [(w, x), (x, w)]));
+            }
+            self.stamp[c.from as usize] += 1;
             touched.clear();
             self.neighbours_into(c.to, &mut touched);
             touched.push(c.to);
             for &w in &touched {
-                self.stamp[w as usize] += 1;
-            }
-            // Every edge at a touched vertex, once, both directions.
-            edges.clear();
-            for &w in &touched {
-                around.clear();
-                self.neighbours_into(w, &mut around);
-                edges.extend(around.iter().map(|&x| (w.min(x), w.max(x))));
+                edges.append(&mut refused[w as usize]);
             }
             edges.sort_unstable();
             edges.dedup();
-            for &(a, b) in &edges {
-                for (x, y) in [(a, b), (b, a)] {
-                    if let Some(c) = self.candidate(x, y) {
-                        heap.push(c);
-                    }
+            for &(x, y) in &edges {
+                if self.vertex_removed_by[x as usize] != NEVER
+                    || self.vertex_removed_by[y as usize] != NEVER
+                {
+                    continue;
+                }
+                if let Some(c) = self.candidate(x, y) {
+                    heap.push(c);
                 }
             }
         }
@@ -356,20 +428,34 @@ impl Builder {
     /// Moves `from` onto `to`: one node of the hierarchy.
     fn collapse(&mut self, from: u32, to: u32) {
         let node = self.node_error.len() as u32;
-        let removed: Vec<u32> = self.around[from as usize].clone();
+        let mut removed = std::mem::take(&mut self.scratch_removed);
+        removed.clone_from(&self.around[from as usize]);
         self.vertex_removed_by[from as usize] = node;
         self.vertex_target[from as usize] = to;
-        let mut region: Vec<u32> = Vec::new();
+        let mut region = std::mem::take(&mut self.scratch_region);
+        let mut groups = std::mem::take(&mut self.scratch_groups);
+        region.clear();
+        groups.clear();
         let mut inherited = 0.0f64;
         for &t in &removed {
             self.removed_by[t as usize] = node;
             inherited = inherited.max(self.node_error[self.created_by[t as usize] as usize]);
+            let start = region.len() as u32;
             region.append(&mut self.covers[t as usize]);
+            // The emptied list keeps its capacity for a triangle of the fan.
+            let emptied = std::mem::take(&mut self.covers[t as usize]);
+            self.spare_covers.push(emptied);
+            groups.push(Group {
+                start,
+                end: region.len() as u32,
+                sphere: self.cover_spheres[t as usize],
+            });
             for v in self.tris[t as usize] {
                 self.around[v as usize].retain(|&x| x != t);
             }
         }
-        let mut fan = Vec::new();
+        let mut fan = std::mem::take(&mut self.scratch_fan);
+        fan.clear();
         for &t in &removed {
             let tri = self.tris[t as usize];
             if tri.contains(&to) {
@@ -378,9 +464,15 @@ impl Builder {
             let new = tri.map(|i| if i == from { to } else { i });
             let id = self.tris.len() as u32;
             self.tris.push(new);
+            let corners = new.map(|i| self.pos[i as usize]);
+            self.corners.push(corners);
+            self.spheres.push(sphere(corners));
+            // Set when the fan's covers are known (`measure`).
+            self.cover_spheres.push(sphere(corners));
             self.created_by.push(node);
             self.removed_by.push(NEVER);
-            self.covers.push(Vec::new());
+            self.covers
+                .push(self.spare_covers.pop().unwrap_or_default());
             for v in new {
                 self.around[v as usize].push(id);
             }
@@ -406,62 +498,134 @@ impl Builder {
                 }
             }
         }
-        let error = self.measure(&fan, &region);
+        let error = self.measure(&fan, &region, &groups);
         self.node_error.push(error.max(inherited));
+        for &t in &fan {
+            let centre = self.spheres[t as usize].0;
+            let radius = self.covers[t as usize]
+                .iter()
+                .map(|&o| {
+                    let (c, r) = self.spheres[o as usize];
+                    c.distance(centre) + r
+                })
+                .fold(0.0, f64::max);
+            // Rounding margin: the sphere must hold every covered point.
+            self.cover_spheres[t as usize] = (centre, radius * (1.0 + 1e-12));
+        }
+        self.scratch_removed = removed;
+        self.scratch_region = region;
+        self.scratch_groups = groups;
+        self.scratch_fan = fan;
     }
 
     fn dist(&self, p: DVec3, t: u32) -> f64 {
-        let [a, b, c] = self.tris[t as usize].map(|i| self.pos[i as usize]);
+        let [a, b, c] = self.corners[t as usize];
         point_triangle_distance(p, a, b, c)
+    }
+
+    /// Whether triangle `t` is certainly farther than `d` from `p` (its bounding sphere is):
+    /// then `dist(p, t)` cannot lower a minimum that is `d` already. The margin (relative
+    /// 1e-9) keeps rounding from skipping a triangle at the same distance.
+    fn beyond(&self, p: DVec3, t: u32, d: f64) -> bool {
+        outside(p, self.spheres[t as usize], d)
     }
 
     /// Sampled two-sided Hausdorff distance between the triangles `fan` and the original
     /// triangles `region` (every triangle sampled at [`samples`]), assigning every original
     /// triangle to the fan triangle nearest its centroid (the first of equally near ones).
     ///
-    /// Exact for those samples, and fast: a sample stops scanning as soon as it finds a
-    /// triangle no farther than the worst distance so far (it cannot raise the maximum); an
-    /// original triangle whose three corners are within the worst distance of its assigned
-    /// fan triangle is not sampled further (distance to one triangle is convex, so the whole
-    /// triangle is that near); a fan triangle's samples look at its assigned originals first.
-    fn measure(&mut self, fan: &[u32], region: &[u32]) -> f64 {
+    /// Exact for those samples, and fast. The outcome, the largest over all samples of the
+    /// distance to the other set, does not depend on the order the samples are visited in,
+    /// so the cheap ones go first and raise `worst` early: the centroids (their distance
+    /// comes with the assignment), then the fan's samples, then the rest of the originals'.
+    /// A sample stops scanning as soon as it finds a triangle no farther than `worst` (it
+    /// cannot raise the maximum), looking first where that is likely (an original's assigned
+    /// fan triangle, a fan triangle's assigned originals); a triangle or a group of originals
+    /// whose bounding sphere is beyond the nearest so far is skipped; an original triangle
+    /// whose three corners are within `worst` of its assigned fan triangle is not sampled
+    /// further (distance to one triangle is convex, so the whole triangle is that near).
+    fn measure(&mut self, fan: &[u32], region: &[u32], groups: &[Group]) -> f64 {
         let mut worst = 0.0f64;
+        let mut assigned = std::mem::take(&mut self.scratch_assigned);
+        assigned.clear();
         for &o in region {
-            let [a, b, c] = self.tris[o as usize].map(|i| self.pos[i as usize]);
+            let [a, b, c] = self.corners[o as usize];
             let centroid = (a + b + c) / 3.0;
             let mut nearest: Option<(u32, f64)> = None;
             for &t in fan {
+                if nearest.is_some_and(|(_, best)| self.beyond(centroid, t, best)) {
+                    continue;
+                }
                 let d = self.dist(centroid, t);
                 if nearest.is_none_or(|(_, best)| d.total_cmp(&best).is_lt()) {
                     nearest = Some((t, d));
                 }
             }
-            let Some((at, d)) = nearest else { continue };
+            let Some((at, d)) = nearest else {
+                assigned.push(NEVER);
+                continue;
+            };
             self.covers[at as usize].push(o);
+            assigned.push(at);
             worst = worst.max(d);
-            if [a, b, c].iter().all(|&v| self.dist(v, at) <= worst) {
+        }
+        worst = self.measure_fan(fan, region, groups, worst);
+        // A corner shared by several originals is one sample: visited once.
+        let g = self.next_generation();
+        for (&o, &at) in region.iter().zip(&assigned) {
+            if at == NEVER {
                 continue;
             }
-            for s in &samples(a, b, c)[..6] {
-                let mut best = f64::INFINITY;
-                for &t in fan {
-                    best = best.min(self.dist(*s, t));
-                    if best <= worst {
-                        break;
+            let [a, b, c] = self.corners[o as usize];
+            let near = [a, b, c].map(|v| self.dist(v, at));
+            if near.iter().all(|&d| d <= worst) {
+                continue;
+            }
+            let tri = self.tris[o as usize];
+            for (k, s) in samples(a, b, c)[..6].iter().enumerate() {
+                let mut best = if k < 3 {
+                    if self.mark[tri[k] as usize] == g {
+                        continue;
+                    }
+                    self.mark[tri[k] as usize] = g;
+                    near[k]
+                } else {
+                    self.dist(*s, at)
+                };
+                if best > worst {
+                    for &t in fan {
+                        if t == at || self.beyond(*s, t, best) {
+                            continue;
+                        }
+                        best = best.min(self.dist(*s, t));
+                        if best <= worst {
+                            break;
+                        }
                     }
                 }
-                if best.is_finite() {
-                    worst = worst.max(best);
-                }
+                worst = worst.max(best);
             }
         }
+        self.scratch_assigned = assigned;
+        worst
+    }
+
+    /// The fan → region half of [`Builder::measure`]: the largest of `worst` and the distance
+    /// from every sample of the fan to the original triangles of `region`.
+    fn measure_fan(
+        &mut self,
+        fan: &[u32],
+        region: &[u32],
+        groups: &[Group],
+        mut worst: f64,
+    ) -> f64 {
         // Fan → region; corners and edges the fan triangles share are sampled once.
         let g = self.next_generation();
         let mut edges = std::mem::take(&mut self.fan_edges);
         edges.clear();
         for &t in fan {
             let tri = self.tris[t as usize];
-            let [a, b, c] = tri.map(|i| self.pos[i as usize]);
+            let [a, b, c] = self.corners[t as usize];
             let mut todo = [true; 7];
             for k in 0..3 {
                 todo[k] = self.mark[tri[k] as usize] != g;
@@ -474,11 +638,30 @@ impl Builder {
             }
             let own = &self.covers[t as usize];
             for (s, _) in samples(a, b, c).into_iter().zip(todo).filter(|x| x.1) {
+                // Its own originals first, then the region's groups of originals, a group
+                // skipped whole when its sphere is beyond the nearest so far. The outcome,
+                // max(worst, nearest) — unchanged once a triangle within `worst` is found —
+                // does not depend on the order.
                 let mut best = f64::INFINITY;
-                for &o in own.iter().chain(region) {
-                    best = best.min(self.dist(s, o));
-                    if best <= worst {
-                        break;
+                let scan = |list: &[u32], best: &mut f64| {
+                    for &o in list {
+                        if self.beyond(s, o, *best) {
+                            continue;
+                        }
+                        *best = best.min(self.dist(s, o));
+                        if *best <= worst {
+                            return true;
+                        }
+                    }
+                    false
+                };
+                if !scan(own, &mut best) {
+                    for g in groups {
+                        if !outside(s, g.sphere, best)
+                            && scan(&region[g.start as usize..g.end as usize], &mut best)
+                        {
+                            break;
+                        }
                     }
                 }
                 if best.is_finite() {
@@ -492,164 +675,4 @@ impl Builder {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::super::fixtures::{bumpy, dense_hausdorff, edges_used, sampled_hausdorff};
-    use super::*;
-    use crate::model::mesh::border_loops;
-
-    #[test]
-    fn errors_are_monotone_along_the_dag() {
-        let m = bumpy(12);
-        let h = MtHierarchy::build(&m.positions, &m.triangles);
-        assert!(h.node_count() > 100, "{} nodes", h.node_count());
-        for t in 0..h.triangles.len() {
-            let (c, r) = (h.created_by[t], h.removed_by[t]);
-            if r != NEVER {
-                assert!(c < r, "arc goes back in time");
-                assert!(h.node_error[c as usize] <= h.node_error[r as usize]);
-            }
-        }
-    }
-
-    #[test]
-    fn every_cut_is_a_triangulation_of_the_patch_within_its_error() {
-        let m = bumpy(12);
-        let h = MtHierarchy::build(&m.positions, &m.triangles);
-        let original_border: f64 = 12.0 * 4.0 * 0.25; // perimeter of the 3 × 3 square
-        let mut errors: Vec<f64> = h.node_error.clone();
-        errors.sort_by(f64::total_cmp);
-        let mut cut = Vec::new();
-        for q in [0.0, 0.1, 0.3, 0.6, 0.9, 1.0] {
-            let eps = errors[((errors.len() - 1) as f64 * q) as usize];
-            let achieved = h.cut(eps, &mut cut);
-            assert!(achieved <= eps);
-            // No overlaps, no holes: every edge used once (border) or twice (inside), and
-            // exactly one border loop around the square.
-            let uses = edges_used(&cut);
-            assert!(uses.values().all(|&u| u <= 2), "overlap at ε {eps}");
-            let loops = border_loops(&cut);
-            assert_eq!(loops.len(), 1, "ε {eps}: {} border loops", loops.len());
-            // Corners stay, so the border keeps the square's outline: same length.
-            let ring = &loops[0];
-            let len: f64 = (0..ring.len())
-                .map(|k| {
-                    let a = m.positions[ring[k] as usize].as_dvec3();
-                    let b = m.positions[ring[(k + 1) % ring.len()] as usize].as_dvec3();
-                    a.distance(b)
-                })
-                .sum();
-            assert!(
-                (len - original_border).abs() < 0.05 * original_border,
-                "border length {len} at ε {eps}"
-            );
-            // Area is kept (a hole would lose some).
-            let area: f64 = cut
-                .iter()
-                .map(|t| {
-                    let [a, b, c] = t.map(|i| m.positions[i as usize].as_dvec3());
-                    let n = (b - a).cross(c - a);
-                    0.5 * DVec3::new(0.0, 0.0, 1.0).dot(n).abs()
-                })
-                .sum();
-            assert!(
-                (area - 9.0).abs() < 0.02,
-                "projected area {area} at ε {eps}"
-            );
-        }
-        // The coarsest cut is much smaller than the original.
-        let coarsest = h.cut(f64::INFINITY, &mut cut);
-        assert!(
-            cut.len() * 10 < m.triangles.len(),
-            "{} triangles",
-            cut.len()
-        );
-        assert!(coarsest >= 0.0);
-    }
-
-    #[test]
-    fn cut_triangles_hold_the_hausdorff_bound() {
-        let m = bumpy(10);
-        let h = MtHierarchy::build(&m.positions, &m.triangles);
-        let pos: Vec<DVec3> = m.positions.iter().map(|p| p.as_dvec3()).collect();
-        let mut cut = Vec::new();
-        for eps in [0.002, 0.01, 0.05] {
-            let achieved = h.cut(eps, &mut cut);
-            let worst = sampled_hausdorff(&pos, &cut, &m.triangles);
-            assert!(
-                worst <= eps + 1e-9,
-                "ε {eps}: Hausdorff {worst} (achieved {achieved})"
-            );
-        }
-    }
-
-    /// A flat polygon triangulated as a zig-zag strip (as modellers write a candle's top)
-    /// has ears: border corners in one triangle each. Collapsing one would remove its
-    /// triangle and leave no fan to measure the error on (a hole measured as error 0); every
-    /// cut keeps the polygon whole within its error.
-    #[test]
-    fn ears_are_not_collapsed_away() {
-        let n = 16;
-        let ring: Vec<Vec3> = (0..n)
-            .map(|k| {
-                let a = std::f32::consts::TAU * k as f32 / n as f32;
-                Vec3::new(a.cos(), a.sin(), 0.0)
-            })
-            .collect();
-        // Zig-zag: 0, 1, n-1, 2, n-2, ... so vertices 0 and n/2 are ears.
-        let order: Vec<u32> = std::iter::once(0)
-            .chain((1..n).flat_map(|k| [k, n - k]).take(n as usize - 1))
-            .collect();
-        let triangles: Vec<[u32; 3]> = order
-            .windows(3)
-            .enumerate()
-            .map(|(k, w)| {
-                if k % 2 == 0 {
-                    [w[0], w[1], w[2]]
-                } else {
-                    [w[1], w[0], w[2]]
-                }
-            })
-            .collect();
-        assert_eq!(triangles.len(), n as usize - 2);
-        let h = MtHierarchy::build(&ring, &triangles);
-        let pos: Vec<DVec3> = ring.iter().map(|p| p.as_dvec3()).collect();
-        let mut cut = Vec::new();
-        let mut errors = h.node_error.clone();
-        errors.sort_by(f64::total_cmp);
-        for &eps in &errors {
-            h.cut(eps, &mut cut);
-            let worst = dense_hausdorff(&pos, &cut, &triangles, 8);
-            assert!(
-                worst <= eps * (1.0 + 1e-9) + 1e-9,
-                "ε {eps}: Hausdorff {worst}"
-            );
-        }
-    }
-
-    /// The node errors bound the Hausdorff distance of every cut to the original measured
-    /// densely (45 points per triangle, both ways), not only at the build's own samples: a
-    /// bumpy patch, reduced and not, over the whole range of errors.
-    #[test]
-    fn cut_errors_bound_a_dense_hausdorff_measurement() {
-        let m = bumpy(10);
-        let pos: Vec<DVec3> = m.positions.iter().map(|p| p.as_dvec3()).collect();
-        let fine = MtHierarchy::build(&m.positions, &m.triangles);
-        let mut reduced = fine.clone();
-        reduced.reduce(5.0);
-        let mut cut = Vec::new();
-        for (name, h) in [("built", &fine), ("reduced", &reduced)] {
-            let mut errors = h.node_error.clone();
-            errors.sort_by(f64::total_cmp);
-            for q in [0.1, 0.3, 0.5, 0.7, 0.9, 1.0] {
-                let eps = errors[((errors.len() - 1) as f64 * q) as usize];
-                h.cut(eps, &mut cut);
-                let worst = dense_hausdorff(&pos, &cut, &m.triangles, 8);
-                assert!(
-                    worst <= eps * (1.0 + 1e-9) + 1e-12,
-                    "{name}: ε {eps}: dense Hausdorff {worst} ({:.3} ε)",
-                    worst / eps
-                );
-            }
-        }
-    }
-}
+mod tests;

@@ -13,8 +13,9 @@ impl MtHierarchy {
     /// Whether triangle `t` is in the cut for error `eps`.
     pub fn in_cut(&self, t: usize, eps: f64) -> bool {
         let made = self.node_error[self.created_by[t] as usize];
+        // A triangle never removed stays in every cut it is created in, ε = ∞ included.
         let gone = match self.removed_by[t] {
-            NEVER => f64::INFINITY,
+            NEVER => return made <= eps,
             n => self.node_error[n as usize],
         };
         made <= eps && gone > eps
@@ -176,7 +177,8 @@ impl MtHierarchy {
     pub(super) fn layout(&mut self) {
         let n = self.node_error.len();
         let mut order: Vec<u32> = (0..n as u32).collect();
-        order.sort_by(|&a, &b| {
+        // Keys are unique (index last), so an unstable sort gives the one order.
+        order.sort_unstable_by(|&a, &b| {
             self.node_error[a as usize]
                 .total_cmp(&self.node_error[b as usize])
                 .then(a.cmp(&b))
@@ -196,8 +198,15 @@ impl MtHierarchy {
                 },
             )
         };
-        let mut idx: Vec<usize> = (0..self.triangles.len()).collect();
-        idx.sort_by_key(|&t| key(t));
+        // By arc, then by index (what a stable sort by arc gives), on packed keys.
+        let mut keyed: Vec<(u64, u32)> = (0..self.triangles.len())
+            .map(|t| {
+                let (c, r) = key(t);
+                (((c as u64) << 32) | r as u64, t as u32)
+            })
+            .collect();
+        keyed.sort_unstable();
+        let idx: Vec<usize> = keyed.iter().map(|&(_, t)| t as usize).collect();
         self.triangles = idx.iter().map(|&t| self.triangles[t]).collect();
         self.created_by = idx.iter().map(|&t| self.created_by[t]).collect();
         self.removed_by = idx.iter().map(|&t| self.removed_by[t]).collect();

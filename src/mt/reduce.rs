@@ -34,20 +34,74 @@ impl MtHierarchy {
     }
 }
 
-/// Whether a triangle of `a` shares a vertex with a triangle of `b` (triangles of `h`):
-/// `a`'s vertices marked with a fresh generation in `marks` (one per vertex), `b`'s looked up.
-fn touch(h: &MtHierarchy, a: &[u32], b: &[u32], marks: &mut Marks) -> bool {
-    let g = marks.fresh();
-    for &t in a {
-        for v in h.triangles[t as usize] {
-            marks.mark[v as usize] = g;
+/// The triangles of an arc and their vertices (sorted, each once), so that whether two arcs
+/// touch is a merge of two short lists.
+#[derive(Clone, Debug, Default)]
+struct ArcTriangles {
+    tris: Vec<u32>,
+    vertices: Vec<u32>,
+}
+
+impl ArcTriangles {
+    /// Adds triangle `t`; [`ArcTriangles::index`] must follow before `vertices` is read.
+    fn push(&mut self, h: &MtHierarchy, t: u32) {
+        self.tris.push(t);
+        self.vertices.extend(h.triangles[t as usize]);
+    }
+
+    fn index(&mut self) {
+        self.vertices.sort_unstable();
+        self.vertices.dedup();
+    }
+
+    /// Takes in the triangles of another arc.
+    fn append(&mut self, mut o: ArcTriangles) {
+        self.tris.append(&mut o.tris);
+        let mut merged = Vec::with_capacity(self.vertices.len() + o.vertices.len());
+        let (a, b) = (&self.vertices, &o.vertices);
+        let (mut i, mut j) = (0, 0);
+        while i < a.len() && j < b.len() {
+            match a[i].cmp(&b[j]) {
+                Ordering::Less => {
+                    merged.push(a[i]);
+                    i += 1;
+                }
+                Ordering::Greater => {
+                    merged.push(b[j]);
+                    j += 1;
+                }
+                Ordering::Equal => {
+                    merged.push(a[i]);
+                    i += 1;
+                    j += 1;
+                }
+            }
+        }
+        merged.extend_from_slice(&a[i..]);
+        merged.extend_from_slice(&b[j..]);
+        self.vertices = merged;
+    }
+}
+
+/// Whether a triangle of `a` shares a vertex with a triangle of `b`: their sorted vertex
+/// lists walked together (or the shorter one's looked up in the much longer one).
+fn touch(a: &ArcTriangles, b: &ArcTriangles) -> bool {
+    let (mut a, mut b) = (a.vertices.as_slice(), b.vertices.as_slice());
+    if a.len() > b.len() {
+        std::mem::swap(&mut a, &mut b);
+    }
+    if a.len() * 16 < b.len() {
+        return a.iter().any(|v| b.binary_search(v).is_ok());
+    }
+    let (mut i, mut j) = (0, 0);
+    while i < a.len() && j < b.len() {
+        match a[i].cmp(&b[j]) {
+            Ordering::Less => i += 1,
+            Ordering::Greater => j += 1,
+            Ordering::Equal => return true,
         }
     }
-    b.iter().any(|&t| {
-        h.triangles[t as usize]
-            .iter()
-            .any(|&v| marks.mark[v as usize] == g)
-    })
+    false
 }
 
 /// Marks with generations: `mark[x] == generation` means marked, so clearing is free.
@@ -75,13 +129,64 @@ impl Marks {
     }
 }
 
+/// A small set of node ids as a sorted vector: the sets of successors and predecessors hold a
+/// handful each, where a vector beats a B-tree at every operation; iteration is in increasing
+/// order, as a `BTreeSet`'s.
+#[derive(Clone, Debug, Default)]
+struct SortedSet(Vec<u32>);
+
+impl SortedSet {
+    fn insert(&mut self, x: u32) {
+        if let Err(at) = self.0.binary_search(&x) {
+            self.0.insert(at, x);
+        }
+    }
+
+    fn remove(&mut self, x: u32) {
+        if let Ok(at) = self.0.binary_search(&x) {
+            self.0.remove(at);
+        }
+    }
+
+    fn iter(&self) -> std::slice::Iter<'_, u32> {
+        self.0.iter()
+    }
+
+    /// The elements of both, increasing.
+    fn intersection<'a>(&'a self, o: &'a SortedSet) -> impl Iterator<Item = u32> + 'a {
+        let (mut i, mut j) = (0, 0);
+        std::iter::from_fn(move || {
+            while i < self.0.len() && j < o.0.len() {
+                match self.0[i].cmp(&o.0[j]) {
+                    Ordering::Less => i += 1,
+                    Ordering::Greater => j += 1,
+                    Ordering::Equal => {
+                        i += 1;
+                        j += 1;
+                        return Some(self.0[i - 1]);
+                    }
+                }
+            }
+            None
+        })
+    }
+}
+
+impl<'a> IntoIterator for &'a SortedSet {
+    type Item = &'a u32;
+    type IntoIter = std::slice::Iter<'a, u32>;
+    fn into_iter(self) -> Self::IntoIter {
+        self.0.iter()
+    }
+}
+
 /// Arc-collapse state: nodes merged by union-find, arcs as triangle lists.
 struct Reducer {
     parent: Vec<u32>,
-    arcs: IntMap<(u32, u32), Vec<u32>>,
+    arcs: IntMap<(u32, u32), ArcTriangles>,
     /// Successors and predecessors of every representative node.
-    succ: Vec<std::collections::BTreeSet<u32>>,
-    pred: Vec<std::collections::BTreeSet<u32>>,
+    succ: Vec<SortedSet>,
+    pred: Vec<SortedSet>,
     version: Vec<u32>,
     mu: f64,
     /// Triangles in all arcs, and the number of arcs (for the mean arc size).
@@ -89,8 +194,6 @@ struct Reducer {
     /// Depth-first search scratch: nodes seen and the stack.
     seen: Marks,
     stack: Vec<u32>,
-    /// Vertices of an arc, for the touching test.
-    vertices: Marks,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -116,16 +219,19 @@ impl PartialOrd for ArcCandidate {
 impl Reducer {
     fn new(h: &MtHierarchy) -> Reducer {
         let n = h.node_error.len();
-        let mut arcs: IntMap<(u32, u32), Vec<u32>> = IntMap::default();
-        let mut succ = vec![std::collections::BTreeSet::new(); n];
-        let mut pred = vec![std::collections::BTreeSet::new(); n];
+        let mut arcs: IntMap<(u32, u32), ArcTriangles> = IntMap::default();
+        let mut succ = vec![SortedSet::default(); n];
+        let mut pred = vec![SortedSet::default(); n];
         for t in 0..h.triangles.len() {
             let (c, r) = (h.created_by[t], h.removed_by[t]);
-            arcs.entry((c, r)).or_default().push(t as u32);
+            arcs.entry((c, r)).or_default().push(h, t as u32);
             if r != NEVER {
                 succ[c as usize].insert(r);
                 pred[r as usize].insert(c);
             }
+        }
+        for arc in arcs.values_mut() {
+            arc.index();
         }
         let min_nonzero = h
             .node_error
@@ -142,7 +248,6 @@ impl Reducer {
             version: vec![0; n],
             seen: Marks::new(n),
             stack: Vec::new(),
-            vertices: Marks::new(h.vertex_target.len()),
             mu: if min_nonzero.is_finite() {
                 min_nonzero / 10.0
             } else {
@@ -192,20 +297,19 @@ impl Reducer {
         if !self.collapsible((c, r)) {
             return None;
         }
-        let size = self.arcs.get(&(c, r))?.len() as f64;
+        let size = self.arcs.get(&(c, r))?.tris.len() as f64;
         let e = |n: u32| h.node_error[n as usize].max(self.mu);
         let e_diff = e(r) / e(c);
         // Arc pairs that merge: common predecessors and common successors of c and r.
         let (mut pairs, mut ps, mut touching) = (0usize, 0usize, 0usize);
-        let mut marks = std::mem::take(&mut self.vertices);
-        let mut pair = |a: &[u32], b: &[u32]| {
+        let mut pair = |a: &ArcTriangles, b: &ArcTriangles| {
             pairs += 1;
-            ps += a.len() + b.len();
-            if touch(h, a, b, &mut marks) {
+            ps += a.tris.len() + b.tris.len();
+            if touch(a, b) {
                 touching += 1;
             }
         };
-        for &x in self.pred[c as usize].intersection(&self.pred[r as usize]) {
+        for x in self.pred[c as usize].intersection(&self.pred[r as usize]) {
             if let (Some(a), Some(b)) = (self.arcs.get(&(x, c)), self.arcs.get(&(x, r))) {
                 pair(a, b);
             }
@@ -218,7 +322,6 @@ impl Reducer {
                 pair(a, b);
             }
         }
-        self.vertices = marks;
         if pairs == 0 {
             // Nothing merges: the collapse would not enlarge any arc.
             return None;
@@ -290,44 +393,43 @@ impl Reducer {
         self.version[r as usize] += 1;
         // The arc's triangles are created and removed at once: never drawn.
         if let Some(gone) = self.arcs.remove(&(c, r)) {
-            self.arc_triangles -= gone.len();
-            for t in gone {
+            self.arc_triangles -= gone.tris.len();
+            for t in gone.tris {
                 h.created_by[t as usize] = r;
                 h.removed_by[t as usize] = r;
             }
         }
-        self.succ[c as usize].remove(&r);
-        self.pred[r as usize].remove(&c);
+        self.succ[c as usize].remove(r);
+        self.pred[r as usize].remove(c);
         // Arcs into c now go into r.
-        let preds: Vec<u32> = std::mem::take(&mut self.pred[c as usize])
-            .into_iter()
-            .collect();
+        let preds: Vec<u32> = std::mem::take(&mut self.pred[c as usize]).0;
         for x in preds {
-            if let Some(tris) = self.arcs.remove(&(x, c)) {
-                for &t in &tris {
+            if let Some(arc) = self.arcs.remove(&(x, c)) {
+                for &t in &arc.tris {
                     h.removed_by[t as usize] = r;
                 }
-                self.arcs.entry((x, r)).or_default().extend(tris);
+                self.arcs.entry((x, r)).or_default().append(arc);
             }
-            self.succ[x as usize].remove(&c);
+            self.succ[x as usize].remove(c);
             self.succ[x as usize].insert(r);
             self.pred[r as usize].insert(x);
             self.version[x as usize] += 1;
         }
         // Arcs out of c now come out of r (including to "never removed").
         let succs: Vec<u32> = std::mem::take(&mut self.succ[c as usize])
+            .0
             .into_iter()
             .chain([NEVER])
             .collect();
         for y in succs {
-            if let Some(tris) = self.arcs.remove(&(c, y)) {
-                for &t in &tris {
+            if let Some(arc) = self.arcs.remove(&(c, y)) {
+                for &t in &arc.tris {
                     h.created_by[t as usize] = r;
                 }
-                self.arcs.entry((r, y)).or_default().extend(tris);
+                self.arcs.entry((r, y)).or_default().append(arc);
             }
             if y != NEVER {
-                self.pred[y as usize].remove(&c);
+                self.pred[y as usize].remove(c);
                 self.pred[y as usize].insert(r);
                 self.succ[r as usize].insert(y);
                 self.version[y as usize] += 1;
