@@ -224,3 +224,19 @@ fn placements_hold_no_vertices_of_their_own() {
         mem.current
     );
 }
+
+/// The largest and 99th-percentile screen errors are those of the patches drawn (all
+/// visible after the first frame), as a sort of their errors gives them.
+#[test]
+fn screen_errors_are_the_drawn_patches_order_statistics() {
+    let scene = teapot_grid(4, 4);
+    let vs = views(&scene);
+    let lod = FrameLoop::new(&scene, &vs[0], LodOptions::default());
+    let all = lod.patch_errors_px();
+    let mut e: Vec<f64> = lod.meshes_with_index().map(|(i, _)| all[i]).collect();
+    assert!(e.len() > 100, "{} patches drawn", e.len());
+    e.sort_by(f64::total_cmp);
+    let p99 = e[((e.len() - 1) as f64 * 0.99).round() as usize];
+    assert!(p99 < e[e.len() - 1], "the errors should differ: {e:?}");
+    assert_eq!(lod.screen_errors(), (e[e.len() - 1], p99));
+}
