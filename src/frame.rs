@@ -211,9 +211,9 @@ fn drawn_meshes(lod: &FrameLoop, offsets: Option<&[DVec3]>, heat_map: bool) -> V
         .map(|(i, m)| match &errors {
             Some(e) => PatchMesh {
                 color: Some(heat_color(e[i], asked)),
-                ..m.clone()
+                ..m.world().into_owned()
             },
-            None => m.clone(),
+            None => m.world().into_owned(),
         })
         .collect();
     match offsets {

@@ -71,7 +71,7 @@ fn instanced_parts_share_tessellations_without_changing_a_vertex() {
     let mut t = Tessellators::new();
     let mut checked = 0;
     for i in 0..scene.patches.len() {
-        let m = lod.mesh(i).expect("one mesh per patch");
+        let m = lod.mesh(i).expect("one mesh per patch").world();
         let mut own = PatchMesh::default();
         t.patch(&scene.patches[i], m.eps_target, &mut own);
         assert_eq!(m.patch_id, own.patch_id);
@@ -108,15 +108,15 @@ fn a_copy_placed_for_another_placement_differs() {
     t.patch(&scene.patches[b], eps, &mut own_b);
     let unplaced = std::sync::Arc::new(unplaced);
     assert_eq!(
-        placed(&unplaced, &scene.patches[a]).positions,
+        placed(&unplaced, &scene.patches[a]).world().positions,
         own_a.positions
     );
     assert_eq!(
-        placed(&unplaced, &scene.patches[b]).positions,
+        placed(&unplaced, &scene.patches[b]).world().positions,
         own_b.positions
     );
     assert_ne!(
-        placed(&unplaced, &scene.patches[b]).positions,
+        placed(&unplaced, &scene.patches[b]).world().positions,
         own_a.positions
     );
 }
@@ -125,22 +125,7 @@ fn a_copy_placed_for_another_placement_differs() {
 /// one's tessellation, translated, and stays within f32 rounding of its own tessellation.
 #[test]
 fn translated_bezier_copies_share_tessellations() {
-    use patchwork::io::Model;
-    use patchwork::model::{BezierPatch, UpAxis};
-    let Ok(Model::Bezier(teapot)) = patchwork::io::read(&common::root().join("models/teapot.bpt"))
-    else {
-        panic!("the teapot reads as Bézier patches");
-    };
-    let mut patches = Vec::new();
-    for (i, j) in [(0, 0), (1, 0), (2, 0), (0, 1), (1, 1), (2, 1)] {
-        let offset = DVec3::new(8.0 * i as f64, 8.0 * j as f64, 0.0);
-        for b in &teapot {
-            let (du, dv) = b.degree();
-            let ctrl = b.control_points().iter().map(|c| *c + offset).collect();
-            patches.push(BezierPatch::new(du, dv, ctrl).expect("a translated patch"));
-        }
-    }
-    let scene = Scene::from_bezier(patches, UpAxis::Z);
+    let scene = teapot_grid(3, 2);
     let vs = views(&scene);
     let mut lod = FrameLoop::new(&scene, &vs[0], LodOptions::default());
     lod.update(&scene, &vs[1]);
@@ -153,7 +138,7 @@ fn translated_bezier_copies_share_tessellations() {
     );
     let mut t = Tessellators::new();
     for (i, patch) in scene.patches.iter().enumerate() {
-        let m = lod.mesh(i).expect("a mesh");
+        let m = lod.mesh(i).expect("a mesh").world();
         let mut own = PatchMesh::default();
         t.patch(patch, m.eps_target, &mut own);
         assert_eq!(m.patch_id, own.patch_id);
@@ -178,4 +163,80 @@ fn translated_bezier_copies_share_tessellations() {
             m.eps_target
         );
     }
+}
+
+/// An `nx × ny` grid of teapots 8 units apart (the issue's scene, small).
+fn teapot_grid(nx: usize, ny: usize) -> Scene {
+    use patchwork::io::Model;
+    use patchwork::model::{BezierPatch, UpAxis};
+    let Ok(Model::Bezier(teapot)) = patchwork::io::read(&common::root().join("models/teapot.bpt"))
+    else {
+        panic!("the teapot reads as Bézier patches");
+    };
+    let mut patches = Vec::new();
+    for j in 0..ny {
+        for i in 0..nx {
+            let offset = DVec3::new(8.0 * i as f64, 8.0 * j as f64, 0.0);
+            for b in &teapot {
+                let (du, dv) = b.degree();
+                let ctrl = b.control_points().iter().map(|c| *c + offset).collect();
+                patches.push(BezierPatch::new(du, dv, ctrl).expect("a translated patch"));
+            }
+        }
+    }
+    Scene::from_bezier(patches, UpAxis::Z)
+}
+
+/// Issue 19: the loop keeps each shared tessellation once, not a moved copy per placement.
+/// Every instance holds no vertices of its own (its struct only: under a quarter of its
+/// world copy's bytes on this grid) and the shared meshes are counted once, apart, in the
+/// loop's memory.
+#[test]
+fn placements_hold_no_vertices_of_their_own() {
+    let scene = teapot_grid(4, 4);
+    let vs = views(&scene);
+    let mut lod = FrameLoop::new(&scene, &vs[0], LodOptions::default());
+    lod.update(&scene, &vs[1]);
+    let (mut instances, mut world_bytes) = (0, 0);
+    for i in 0..scene.patches.len() {
+        let m = lod.mesh(i).expect("a mesh");
+        if m.instance.is_some() {
+            instances += 1;
+            assert_eq!(
+                m.mem_bytes(),
+                std::mem::size_of::<PatchMesh>(),
+                "patch {i}: a placement holds geometry of its own"
+            );
+            assert!(m.triangle_count() > 0, "patch {i}");
+        }
+        world_bytes += m.world().mem_bytes();
+    }
+    assert_eq!(instances, scene.patches.len());
+    // Current tessellations: a struct and the Arc's counters per placement, nothing else;
+    // the shared meshes counted apart, once.
+    let mem = lod.memory();
+    let per = std::mem::size_of::<PatchMesh>() + 2 * std::mem::size_of::<usize>();
+    assert_eq!(mem.current, scene.patches.len() * per, "{mem:?}");
+    assert!(mem.shared > 0, "{mem:?}");
+    assert!(
+        mem.current * 4 < world_bytes,
+        "the placements hold {} bytes; their world copies take {world_bytes}",
+        mem.current
+    );
+}
+
+/// The largest and 99th-percentile screen errors are those of the patches drawn (all
+/// visible after the first frame), as a sort of their errors gives them.
+#[test]
+fn screen_errors_are_the_drawn_patches_order_statistics() {
+    let scene = teapot_grid(4, 4);
+    let vs = views(&scene);
+    let lod = FrameLoop::new(&scene, &vs[0], LodOptions::default());
+    let all = lod.patch_errors_px();
+    let mut e: Vec<f64> = lod.meshes_with_index().map(|(i, _)| all[i]).collect();
+    assert!(e.len() > 100, "{} patches drawn", e.len());
+    e.sort_by(f64::total_cmp);
+    let p99 = e[((e.len() - 1) as f64 * 0.99).round() as usize];
+    assert!(p99 < e[e.len() - 1], "the errors should differ: {e:?}");
+    assert_eq!(lod.screen_errors(), (e[e.len() - 1], p99));
 }

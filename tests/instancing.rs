@@ -29,9 +29,11 @@ fn views(scene: &Scene) -> Vec<View> {
         .collect()
 }
 
-/// Bytes a patch's own geometry takes as lists: 32 per vertex, 12 per triangle, 40 per
-/// border point (one per border vertex and one per ring).
+/// Bytes a patch's geometry takes as lists (a placement's: of its world-space copy): 32 per
+/// vertex, 12 per triangle, 40 per border point (one per border vertex and one per ring).
 fn bytes(m: &PatchMesh) -> u64 {
+    let world = m.world();
+    let m = world.as_ref();
     let points = BorderGeometry::of(std::iter::once(m)).points.len();
     (32 * m.positions.len() + 12 * m.triangles.len() + 40 * points) as u64
 }

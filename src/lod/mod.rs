@@ -185,11 +185,14 @@ pub struct LodMemory {
     pub current: usize,
     /// The cached levels other than the current one.
     pub cached: usize,
+    /// The shared tessellations the placements of instanced parts draw (each once, however
+    /// many placements hold it; a placement itself holds no vertices).
+    pub shared: usize,
 }
 
 impl LodMemory {
     pub fn total(&self) -> usize {
-        self.state + self.current + self.cached
+        self.state + self.current + self.cached + self.shared
     }
 }
 
@@ -296,7 +299,8 @@ impl FrameLoop {
     }
 
     /// Bytes held: per-patch state, current and cached tessellations (capacities, see
-    /// [`PatchMesh::mem_bytes`]; a mesh patch's cut state counted by its inline size only).
+    /// [`PatchMesh::mem_bytes`]; a mesh patch's cut state counted by its inline size only),
+    /// and the shared tessellations their instances draw, each once.
     pub fn memory(&self) -> LodMemory {
         use std::mem::size_of;
         let arc = |m: &Arc<PatchMesh>| 2 * size_of::<usize>() + m.mem_bytes();
@@ -304,11 +308,19 @@ impl FrameLoop {
             state: self.patches.capacity() * size_of::<PatchLod>(),
             ..LodMemory::default()
         };
+        let mut shared = std::collections::HashSet::new();
         for p in &self.patches {
             mem.state += p.cache.capacity() * size_of::<(i32, Arc<PatchMesh>)>();
             mem.current += arc(&p.mesh);
             mem.cached += p.cache.iter().map(|(_, m)| arc(m)).sum::<usize>();
+            let held = std::iter::once(&p.mesh).chain(p.cache.iter().map(|(_, m)| m));
+            for inst in held.filter_map(|m| m.instance.as_ref()) {
+                if shared.insert(Arc::as_ptr(&inst.shared)) {
+                    mem.shared += arc(&inst.shared);
+                }
+            }
         }
+        mem.shared += self.shared.unused_bytes(&shared);
         mem
     }
 
@@ -323,7 +335,9 @@ impl FrameLoop {
         self.generation
     }
 
-    /// The meshes to draw: patches inside the frustum at their current tessellation.
+    /// The meshes to draw: patches inside the frustum at their current tessellation. A
+    /// placement of a shared tessellation is an instance holding no vertices of its own
+    /// ([`PatchMesh::world`] gives its world-space copy).
     pub fn meshes(&self) -> impl Iterator<Item = &PatchMesh> {
         self.meshes_with_index().map(|(_, m)| m)
     }
@@ -437,7 +451,7 @@ impl FrameLoop {
         if stats.retessellated + stats.from_cache > 0 || frustum_changed {
             self.generation += 1;
         }
-        stats.triangles = self.meshes().map(|m| m.triangles.len()).sum();
+        stats.triangles = self.meshes().map(PatchMesh::triangle_count).sum();
         stats
     }
 
@@ -483,9 +497,11 @@ impl FrameLoop {
         if e.is_empty() {
             return (0.0, 0.0);
         }
-        e.sort_by(f64::total_cmp);
-        let p99 = e[((e.len() - 1) as f64 * 0.99).round() as usize];
-        (e[e.len() - 1], p99)
+        // Order statistics by selection, not a sort of every visible patch's error.
+        let max = e.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let k = ((e.len() - 1) as f64 * 0.99).round() as usize;
+        let (_, p99, _) = e.select_nth_unstable_by(k, f64::total_cmp);
+        (max, *p99)
     }
 }
 

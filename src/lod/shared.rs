@@ -2,14 +2,17 @@
 //! patches per face, all on one shared surface with different placements. Its tessellation
 //! at a level depends only on the surface, the level's ε and how much the placement scales
 //! lengths ([`shared_surface`]), so it is made once, in the surface's own coordinates, and
-//! each placement gets a moved copy ([`placed`]) — the same mesh, vertex for vertex, that
-//! tessellating the patch itself gives (tested in `tests/lod.rs`).
+//! each placement gets an [`Instance`] of it ([`placed`]): the placement and the errors, no
+//! vertices of its own — its world-space copy ([`PatchMesh::world`]) is the same mesh,
+//! vertex for vertex, that tessellating the patch itself gives (tested in
+//! `tests/frame_loop_scale.rs`). The loop then holds each shared tessellation once, however
+//! many placements draw it, and re-tessellating a placement costs no copy.
 //!
 //! Bézier files (`.bpt`) have no placements, but a model made of copies of one part (the
 //! teapot grid of issue 19) repeats the same control points, translated. Bézier patches whose
 //! control points agree after translation (to within [`TRANSLATION_TOLERANCE`] × the model's
-//! diagonal, checked exactly after grouping) share too: a copy is the first patch's
-//! tessellation translated, and its error grows by the largest control-point difference —
+//! diagonal, checked exactly after grouping) share too: a copy is an instance of the first
+//! patch's tessellation, translated, and its error grows by the largest control-point difference —
 //! a bound, since the difference of two Bézier patches is the Bézier patch of their control
 //! points' differences (convex hull property).
 //!
@@ -24,7 +27,7 @@ use rayon::prelude::*;
 use super::Levels;
 use crate::model::Scene;
 use crate::mt::CutState;
-use crate::tessellate::{Instance, PatchMesh, Tessellators, placed, shared_surface};
+use crate::tessellate::{Instance, PatchMesh, Tessellators, instance_of, placed, shared_surface};
 
 /// Frames a shared tessellation is kept without being asked for.
 pub const KEEP_FRAMES: u64 = 16;
@@ -180,6 +183,17 @@ impl SharedTessellations {
             .collect()
     }
 
+    /// Bytes of the shared tessellations kept but not in `used` (addresses of those an
+    /// instance holds), as [`super::FrameLoop::memory`] counts them.
+    pub(super) fn unused_bytes(&self, used: &HashSet<*const PatchMesh>) -> usize {
+        self.meshes
+            .values()
+            .map(|(m, _)| m)
+            .filter(|m| !used.contains(&Arc::as_ptr(m)))
+            .map(|m| 2 * std::mem::size_of::<usize>() + m.mem_bytes())
+            .sum()
+    }
+
     /// Ends a frame: drops the shared tessellations nobody asked for in [`KEEP_FRAMES`].
     pub(super) fn end_frame(&mut self) {
         let frame = self.frame;
@@ -189,30 +203,27 @@ impl SharedTessellations {
     }
 }
 
-/// A copy of `source` (the tessellation of the first patch of `share`'s class) for `patch`:
-/// translated by `share.delta`, its error raised by `share.deviation`; an [`Instance`] of
-/// `source`.
+/// `patch`'s mesh from `source` (the tessellation of the first patch of `share`'s class):
+/// an [`Instance`] of `source` translated by `share.delta`, its error raised by
+/// `share.deviation` (no geometry of its own, [`PatchMesh::world`]); a failed `source` is
+/// copied as it is.
 fn translated(source: &Arc<PatchMesh>, patch: &crate::model::Patch, share: &Share) -> PatchMesh {
-    let mut out = PatchMesh::clone(source);
-    out.patch_id = patch.id;
-    out.color = patch.color;
-    for p in &mut out.positions {
-        *p = (p.as_dvec3() + share.delta).as_vec3();
+    if source.failure.is_some() {
+        return PatchMesh {
+            patch_id: patch.id,
+            color: patch.color,
+            ..PatchMesh::clone(source)
+        };
     }
-    out.error += share.deviation;
-    if share.deviation > 0.0 {
-        // The border moved off its curve by up to the deviation too: fat borders the whole ε
-        // wide, as a placed copy draws them (`fat_border_vertex_placed`).
-        out.border_error = None;
-    }
-    if source.failure.is_none() {
-        out.instance = Some(Instance {
+    instance_of(
+        source,
+        Instance {
             shared: source.clone(),
             transform: glam::DMat4::from_translation(share.delta),
             error_added: share.deviation,
-        });
-    }
-    out
+        },
+        patch,
+    )
 }
 
 /// Groups the Bézier patches of `scene` whose control points agree after translation (module

@@ -448,15 +448,18 @@ impl BorderGeometry {
     /// Points [`BorderGeometry::append`] adds for `m`: its border vertices and a closing
     /// point per ring.
     pub fn points_of(m: &PatchMesh) -> usize {
-        m.borders
+        m.geometry()
+            .borders
             .iter()
             .filter(|r| !r.is_empty())
             .map(|r| r.len() + 1)
             .sum()
     }
 
-    /// Appends the border points of `m`.
+    /// Appends the border points of `m` (an instance's: of its world-space copy).
     pub fn append(&mut self, m: &PatchMesh) {
+        let world = m.world();
+        let m = world.as_ref();
         let eps = m.eps_border() as f32;
         let width = width_bits(m.border_width(), m.eps_border());
         let color = super::upload::packed_color(m.color);

@@ -195,7 +195,10 @@ impl Built {
         strips: Option<Arc<Vec<u32>>>,
         reindex: bool,
     ) -> Built {
-        let m = mesh.as_ref();
+        // A placement drawn as a world-space copy (instances off) is moved here, for the
+        // upload only: the frame loop holds no copy of it.
+        let world = mesh.world();
+        let m = world.as_ref();
         let is_static = renderer.draws_static(m);
         let strips = if is_static || !renderer.primitives.strips_for(m) {
             None

@@ -259,7 +259,10 @@ impl Renderer {
 
     /// Uploads patch meshes: surfaces and fat-border geometry ([`BorderGeometry`]).
     pub fn upload<'a>(&self, meshes: impl IntoIterator<Item = &'a PatchMesh>) -> GpuMeshes {
-        let meshes: Vec<&PatchMesh> = meshes.into_iter().collect();
+        // Instances (no vertices of their own) as world-space copies.
+        let worlds: Vec<std::borrow::Cow<'a, PatchMesh>> =
+            meshes.into_iter().map(PatchMesh::world).collect();
+        let meshes: Vec<&PatchMesh> = worlds.iter().map(AsRef::as_ref).collect();
         let mut vertices = Vec::new();
         let (mut indices, mut strip_indices): (Vec<u32>, Vec<u32>) = Default::default();
         let (mut statics, mut ranges, mut static_triangles) = (Vec::new(), Vec::new(), 0u32);

@@ -51,13 +51,18 @@ pub struct PatchMesh {
     /// patch (`triangles` holds the same triangles for CPU work).
     pub arcs: Option<CutRanges>,
     /// This mesh is a placement of a tessellation other patches share (instanced parts,
-    /// `lod::shared`): the renderer may draw the shared mesh with the placement instead.
+    /// `lod::shared`): its geometry is the shared mesh's, moved by the placement, and is not
+    /// held here — `positions`, `normals`, `triangles` and `borders` stay empty (the frame
+    /// loop keeps one copy per shared tessellation, not one per placement). The renderer
+    /// draws the shared mesh with the placement; [`PatchMesh::world`] makes the world-space
+    /// copy for whoever needs its vertices on the CPU.
     pub instance: Option<Instance>,
 }
 
-/// A mesh that is `shared` moved by `transform`: vertex for vertex what [`placed`] (or a
-/// translation) makes of it, up to f32 rounding, with its own patch id and colour and its
-/// error raised by `error_added` (world units). Only similarities (rotation, reflection,
+/// A mesh that is `shared` moved by `transform` ([`PatchMesh::world`]: vertex for vertex
+/// what tessellating the placed patch itself gives, or for translated Bézier copies within
+/// f32 rounding of it), with its own patch id and colour and its error raised by
+/// `error_added` (world units). Only similarities (rotation, reflection,
 /// uniform scale, translation: [`is_similarity`]) are instances, so lengths scale evenly,
 /// normals turn with the transform and the shared mesh's errors are already the placement's
 /// ([`shared_surface`] keys on the scale).
@@ -128,8 +133,49 @@ impl PatchMesh {
         }
     }
 
+    /// Border vertices (an instance's: its shared mesh's).
     pub fn border_vertex_count(&self) -> usize {
-        self.borders.iter().map(Vec::len).sum()
+        self.geometry().borders.iter().map(Vec::len).sum()
+    }
+
+    /// Triangles drawn for this patch (an instance's: its shared mesh's).
+    pub fn triangle_count(&self) -> usize {
+        self.geometry().triangles.len()
+    }
+
+    /// The mesh that holds this patch's triangles, border loops and (unmoved) vertices: the
+    /// shared mesh of an instance, else this one. Indices are the same either way.
+    pub fn geometry(&self) -> &PatchMesh {
+        self.instance.as_ref().map_or(self, |i| i.shared.as_ref())
+    }
+
+    /// This patch's mesh in world space: itself, or for an instance (which holds no geometry
+    /// of its own) its shared mesh moved by the placement, with the instance's id, colour and
+    /// errors — what tessellating the patch on its own gives ([`place`]; a translated Bézier
+    /// copy within f32 rounding). The copy is no instance.
+    pub fn world(&self) -> std::borrow::Cow<'_, PatchMesh> {
+        let Some(inst) = &self.instance else {
+            return std::borrow::Cow::Borrowed(self);
+        };
+        let shared = inst.shared.as_ref();
+        let mut out = PatchMesh {
+            patch_id: self.patch_id,
+            positions: shared.positions.clone(),
+            normals: shared.normals.clone(),
+            triangles: shared.triangles.clone(),
+            borders: shared.borders.clone(),
+            eps_target: self.eps_target,
+            error: self.error,
+            resolution: self.resolution,
+            trim_error: self.trim_error,
+            border_error: self.border_error,
+            failure: self.failure.clone(),
+            color: self.color,
+            arcs: None,
+            instance: None,
+        };
+        place(&mut out, &inst.transform);
+        std::borrow::Cow::Owned(out)
     }
 
     /// Bytes this mesh holds: the struct and its arrays' capacities (positions, normals,
@@ -140,6 +186,7 @@ impl PatchMesh {
         fn cap<T>(v: &Vec<T>) -> usize {
             v.capacity() * size_of::<T>()
         }
+        // (An instance's shared mesh is counted once, by whoever holds it: not here.)
         size_of::<PatchMesh>()
             + cap(&self.positions)
             + cap(&self.normals)
@@ -233,7 +280,7 @@ impl Tessellators {
                         out.error *= scale;
                         out.eps_target = eps;
                         if place_it {
-                            place(out, patch);
+                            place(out, &patch.transform);
                         }
                     }
                     Ok(Err(e)) => fail(out, eps, format!("face #{}: {e}", face.id)),
@@ -318,34 +365,68 @@ pub fn shared_surface(patch: &Patch) -> Option<(usize, u64)> {
     }
 }
 
-/// A copy of `unplaced` (from [`Tessellators::unplaced`] on a patch with the same
-/// [`shared_surface`]) moved to `patch`'s placement, with its id and colour: exactly what
-/// [`Tessellators::patch`] makes for `patch`. Marked as an [`Instance`] of `unplaced` when
-/// the placement is a similarity.
+/// `patch`'s mesh from `unplaced` (from [`Tessellators::unplaced`] on a patch with the same
+/// [`shared_surface`]), with its id and colour: when the placement is a similarity, an
+/// [`Instance`] of `unplaced` holding no geometry of its own ([`PatchMesh::world`] gives
+/// exactly what [`Tessellators::patch`] makes for `patch`); otherwise (or when the shared
+/// tessellation failed) a moved copy.
 pub fn placed(unplaced: &std::sync::Arc<PatchMesh>, patch: &Patch) -> PatchMesh {
-    let mut out = PatchMesh::clone(unplaced);
-    out.patch_id = patch.id;
-    out.color = patch.color;
-    if out.failure.is_none() {
-        place(&mut out, patch);
-        if is_similarity(&patch.transform) {
-            out.instance = Some(Instance {
+    if unplaced.failure.is_none() && is_similarity(&patch.transform) {
+        return instance_of(
+            unplaced,
+            Instance {
                 shared: unplaced.clone(),
                 transform: patch.transform,
                 error_added: 0.0,
-            });
-        }
+            },
+            patch,
+        );
+    }
+    let mut out = PatchMesh::clone(unplaced);
+    out.patch_id = patch.id;
+    out.color = patch.color;
+    out.instance = None;
+    if out.failure.is_none() {
+        place(&mut out, &patch.transform);
     }
     out
 }
 
-/// Moves a mesh from its patch's own coordinates into the scene.
-fn place(out: &mut PatchMesh, patch: &Patch) {
-    let m = patch.transform;
-    if m == glam::DMat4::IDENTITY {
+/// The mesh of `patch` drawn as `instance`: no geometry of its own, the shared mesh's errors
+/// (the error raised by the instance's `error_added`; a border moved off its curve by that
+/// much has no measured border error: fat borders the whole ε wide, as the placed shader
+/// draws them), `patch`'s id and colour.
+pub fn instance_of(shared: &PatchMesh, instance: Instance, patch: &Patch) -> PatchMesh {
+    PatchMesh {
+        patch_id: patch.id,
+        color: patch.color,
+        eps_target: shared.eps_target,
+        error: shared.error + instance.error_added,
+        resolution: shared.resolution,
+        trim_error: shared.trim_error,
+        border_error: shared.border_error.filter(|_| instance.error_added <= 0.0),
+        failure: None,
+        instance: Some(instance),
+        ..PatchMesh::default()
+    }
+}
+
+/// Moves a mesh from its patch's own coordinates into the scene by `m`: positions through
+/// `m` (a pure translation adds it, in f64), normals through its inverse transpose,
+/// normalized — unless its linear part is the identity (a translation keeps them as they are).
+pub fn place(out: &mut PatchMesh, m: &glam::DMat4) {
+    if *m == glam::DMat4::IDENTITY {
         return;
     }
-    let n = DMat3::from_mat4(m).inverse().transpose();
+    let linear = DMat3::from_mat4(*m);
+    if linear == DMat3::IDENTITY {
+        let t = m.w_axis.truncate();
+        for p in out.positions.iter_mut() {
+            *p = (p.as_dvec3() + t).as_vec3();
+        }
+        return;
+    }
+    let n = linear.inverse().transpose();
     for p in out.positions.iter_mut() {
         *p = m.transform_point3(p.as_dvec3()).as_vec3();
     }
@@ -431,8 +512,8 @@ impl MeshStats {
             ..MeshStats::default()
         };
         for m in meshes {
-            s.triangles += m.triangles.len();
-            s.vertices += m.positions.len();
+            s.triangles += m.triangle_count();
+            s.vertices += m.geometry().positions.len();
             s.border_vertices += m.border_vertex_count();
             s.bytes += m.mem_bytes();
             s.eps_min = s.eps_min.min(m.eps_target);

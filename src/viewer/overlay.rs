@@ -14,6 +14,8 @@ pub fn draw_wireframe<'a>(
     };
     let (w, h) = (frame.width as usize, frame.height as usize);
     for m in meshes {
+        let world = m.world();
+        let m = world.as_ref();
         let projected: Vec<Option<(f64, f64, f64)>> = m
             .positions
             .iter()
