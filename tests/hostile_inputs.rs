@@ -91,7 +91,8 @@ fn a_reference_cycle_is_refused_before_truck_follows_it() {
 /// file: refused by height, whatever thread converts the face.
 #[test]
 fn a_reference_chain_thousands_deep_is_refused() {
-    let text = std::fs::read_to_string(data("step/hostile/surface_curve_cycle.step")).unwrap();
+    let text = std::fs::read_to_string(data("step/hostile/surface_curve_cycle.step"))
+        .expect("read the cycle file");
     let n = 5000;
     let mut chain = String::new();
     for i in 0..n {
@@ -103,7 +104,7 @@ fn a_reference_chain_thousands_deep_is_refused() {
     let cycle = "#69003 = SURFACE_CURVE('',#69003,(#69003),.CURVE_3D.);";
     assert!(text.contains(cycle));
     let path = common::scratch("hostile").join("deep_chain.step");
-    std::fs::write(&path, text.replace(cycle, &chain)).unwrap();
+    std::fs::write(&path, text.replace(cycle, &chain)).expect("write the chain file");
     let options = LoadOptions::new(Hierarchies::CachedOrOriginal, None);
     let msg = prep::load_with_options(&path, &options, &patchwork::util::NoProgress)
         .map(|_| ())

@@ -542,8 +542,6 @@ fn segments(loops: &[Vec<BPoint>]) -> Vec<(DVec2, DVec2)> {
     segs
 }
 
-/// Even-odd point-in-polygon over all loop segments.
-
 /// Grid cells (nu × nv over the box from `lo`) that a border segment passes through.
 fn border_cells(
     segs: &[(DVec2, DVec2)],
