@@ -168,9 +168,7 @@ mod tests {
     use super::*;
 
     fn refused_of(data: &str) -> BTreeMap<u64, String> {
-        let text = format!(
-            "ISO-10303-21;\nHEADER;\nFILE_DESCRIPTION((''),'2;1');\nFILE_NAME('','',(''),(''),'','','');\nFILE_SCHEMA(('AUTOMOTIVE_DESIGN'));\nENDSEC;\nDATA;\n{data}\nENDSEC;\nEND-ISO-10303-21;\n"
-        );
+        let text = super::super::p21::fixtures::wrap(data);
         refused(&super::super::p21::parse(&text).expect("parses"))
     }
 

@@ -209,8 +209,8 @@ fn halved_node_errors_fail_the_dense_check() {
 /// shortfall to 10 % and fails for undercounting errors (halved).
 const BUNNY_SHORTFALL: f64 = 1.1;
 
-#[test]
-fn bunny_patches_hold_a_dense_hausdorff_bound() {
+/// models/bunny.glb, welded and partitioned into patches of about `target` triangles.
+fn bunny_patches(target: usize) -> Vec<crate::model::mesh::MeshPatch> {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/models/bunny.glb");
     let crate::io::Model::Mesh(mut mesh) =
         crate::io::read(std::path::Path::new(path)).expect("the bunny loads")
@@ -218,7 +218,12 @@ fn bunny_patches_hold_a_dense_hausdorff_bound() {
         panic!("the bunny is a mesh");
     };
     mesh.weld();
-    let patches = crate::prep::partition(&mesh, 200);
+    crate::prep::partition(&mesh, target)
+}
+
+#[test]
+fn bunny_patches_hold_a_dense_hausdorff_bound() {
+    let patches = bunny_patches(200);
     // A spread of patches (the partition's order follows the surface).
     let (mut worst, mut halved_worst) = (0.0f64, 0.0f64);
     for p in patches.iter().step_by(patches.len() / 4).take(4) {
@@ -248,14 +253,7 @@ fn bunny_patches_hold_a_dense_hausdorff_bound() {
 /// its neighbourhood changed would show up here).
 #[test]
 fn no_valid_collapse_is_left_at_the_coarsest_level() {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/models/bunny.glb");
-    let crate::io::Model::Mesh(mut mesh) =
-        crate::io::read(std::path::Path::new(path)).expect("the bunny loads")
-    else {
-        panic!("the bunny is a mesh");
-    };
-    mesh.weld();
-    let bunny = crate::prep::partition(&mesh, 1500);
+    let bunny = bunny_patches(1500);
     let grid = bumpy(12);
     let cases = [(&grid.positions, &grid.triangles)]
         .into_iter()

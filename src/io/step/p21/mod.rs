@@ -415,7 +415,7 @@ type Res<T> = Result<T, P21Error>;
 
 /// Files and helpers shared by the tests of the scanner's modules.
 #[cfg(test)]
-mod fixtures {
+pub(crate) mod fixtures {
     use super::{P21Error, parse};
 
     const MODELS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/models/");
@@ -431,7 +431,8 @@ mod fixtures {
         std::fs::read_to_string(format!("{MODELS}{name}")).expect("model file is readable")
     }
 
-    pub(super) fn wrap(data: &str) -> String {
+    /// `data` (entity instances) as a whole exchange structure.
+    pub(crate) fn wrap(data: &str) -> String {
         format!(
             "ISO-10303-21;\nHEADER;\nFILE_SCHEMA(('TEST'));\nENDSEC;\nDATA;\n{data}\nENDSEC;\n\
              END-ISO-10303-21;\n"
