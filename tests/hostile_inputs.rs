@@ -117,3 +117,16 @@ fn a_reference_chain_thousands_deep_is_refused() {
         "{msg}"
     );
 }
+
+/// A trim-curve control point at z = −10²⁰⁴ (fuzz, trimmed target): its edge's points
+/// overflowed f32 to infinity, the model's box collapsed to a point, and the face was
+/// tessellated at ε = 6·10⁻¹⁷ (494 344 triangles, 19 s, 48 s in the fuzz target). Now the
+/// face is refused by the same f32 rule as Bézier control points and mesh vertices.
+#[test]
+fn a_face_reaching_past_f32_is_refused() {
+    let msg = load_error("step/hostile/point_past_f32_range.step");
+    assert!(
+        msg.contains("#68996: its points reach beyond ±1e19 (to inf)"),
+        "{msg}"
+    );
+}

@@ -13,6 +13,7 @@ use rayon::prelude::*;
 use crate::io::LoadError;
 use crate::io::step::StepModel;
 use crate::isolate::isolated;
+use crate::model::bezier::MAX_COORDINATE;
 use crate::model::{
     Instance, Part, Patch, PatchSurface, Scene, SkippedFace, Sphere, UpAxis, bounding_box,
     transform_scale, trimmed::TrimmedFace,
@@ -194,10 +195,26 @@ fn probe(
     let tol = (face.bounds.radius * PROBE_TOLERANCE).max(1e-9);
     let mut mesh = PatchMesh::default();
     isolated(|| t.tessellate(face, tol, &mut mesh))?.map_err(|e| e.to_string())?;
+    let grow = mesh.error + tol;
+    // As for Bézier patches and meshes: a face reaching past the GPU's f32 range (its
+    // vertices overflowed to infinity, or its error did) can be neither drawn nor framed.
+    let reach = mesh
+        .positions
+        .iter()
+        .map(|p| match p.is_finite() {
+            true => f64::from(p.abs().max_element()),
+            false => f64::INFINITY,
+        })
+        .fold(0.0, f64::max)
+        + grow;
+    if reach.is_nan() || reach > MAX_COORDINATE {
+        return Err(format!(
+            "its points reach beyond ±{MAX_COORDINATE:e} (to {reach:e}), which the GPU's f32 cannot draw"
+        ));
+    }
     let pts = mesh.positions.iter().map(|p| p.as_dvec3());
     let s = Sphere::around(pts.clone());
     let (lo, hi) = bounding_box(pts).ok_or("no vertices")?;
-    let grow = mesh.error + tol;
     Ok((
         Sphere {
             center: s.center,

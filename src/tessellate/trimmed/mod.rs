@@ -146,6 +146,14 @@ impl TrimmedTessellator {
         } else {
             face.bounds.radius.max(1e-9) * 1e-3
         };
+        // No tessellation is more accurate than f32, which stores its vertices, at the
+        // face's coordinates: ε is held there (`eps_target` says so). This also bounds the
+        // work when a degenerate view asks for far less.
+        let magnitude = face.bounds.center.abs().max_element() + face.bounds.radius;
+        let eps = match magnitude.is_finite() {
+            true => eps.max(f64::from(f32::EPSILON) * magnitude),
+            false => eps,
+        };
         out.positions.clear();
         out.normals.clear();
         out.triangles.clear();
