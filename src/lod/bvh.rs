@@ -6,9 +6,10 @@
 //! Built once per frame loop, top-down: a node's patches are split at the median of their
 //! centres along the longest axis of the centres' box, down to [`LEAF_SIZE`] patches. Every
 //! node keeps a sphere around its patches' spheres. A query tests a node's sphere and skips
-//! the whole subtree when it misses the frustum; inside, every patch is tested on its own
-//! sphere with the same test as before, so the patches found are exactly those a linear scan
-//! finds (tested in `tests`).
+//! the whole subtree when it misses the frustum, takes the whole subtree untested when the
+//! sphere lies wholly inside it (the common case of a view over the whole model); otherwise,
+//! down to the leaves, every patch is tested on its own sphere with the same test as before,
+//! so the patches found are exactly those a linear scan finds (tested in `tests`).
 
 use glam::DVec3;
 
@@ -27,6 +28,9 @@ struct Node {
     /// (the left child follows the node) and `count` is 0.
     first: u32,
     count: u32,
+    /// The subtree's patches: `[start, end)` of `order`.
+    start: u32,
+    end: u32,
 }
 
 /// The hierarchy (see the module doc).
@@ -65,7 +69,11 @@ impl Bvh {
             if !frustum.sees(&node.sphere) {
                 continue;
             }
-            if node.count > 0 {
+            if frustum.contains(&node.sphere) {
+                // Every patch sphere of the subtree lies inside the node's, so inside the
+                // (convex) frustum: each one would pass the test.
+                out.extend_from_slice(&self.order[node.start as usize..node.end as usize]);
+            } else if node.count > 0 {
                 let range = node.first as usize..(node.first + node.count) as usize;
                 out.extend(
                     self.order[range]
@@ -93,6 +101,8 @@ fn build(spheres: &[Sphere], order: &mut [u32], offset: u32, nodes: &mut Vec<Nod
         sphere: enclosing(order.iter().map(|&i| spheres[i as usize])),
         first: offset,
         count: order.len() as u32,
+        start: offset,
+        end: offset + order.len() as u32,
     });
     if order.len() <= LEAF_SIZE {
         return;

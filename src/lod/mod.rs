@@ -11,8 +11,8 @@
 //! ```
 //!
 //! (the paper's ε_act is our current ε_c, its ε_c our wanted ε_w), and are re-tessellated from
-//! the top until the frame's time budget (default 40 ms, as in the paper) is spent, in batches
-//! on rayon workers. Fat borders always use each patch's *current* ε_c, so the picture stays
+//! the top until the frame's time budget (default 40 ms, as in the paper) is spent, by the
+//! rayon workers, which take the jobs in queue order. Fat borders always use each patch's *current* ε_c, so the picture stays
 //! crack-free while the queue catches up.
 //!
 //! **Levels and hysteresis** (Pajon, "LOD overview", on avoiding flicker between levels):
@@ -202,8 +202,6 @@ pub struct FrameLoop {
     pub options: LodOptions,
     levels: Levels,
     patches: Vec<PatchLod>,
-    /// Measured seconds per re-tessellated patch (running mean), to fit batches in the budget.
-    seconds_per_patch: f64,
     /// Changes whenever the set of meshes to draw changes (re-upload only then).
     generation: u64,
     /// Hierarchy over the patches' bounds, and the scene it was built for (address and patch
@@ -247,7 +245,7 @@ impl FrameLoop {
             })
             .collect();
         let mut cuts: Vec<Option<CutState>> = jobs.iter().map(|_| None).collect();
-        let meshes = shared.tessellate(scene, &levels, &jobs, &mut cuts);
+        let meshes = shared.tessellate(scene, &levels, &jobs, &mut cuts, None);
         shared.end_frame();
         let patches: Vec<PatchLod> = scene
             .patches
@@ -256,7 +254,8 @@ impl FrameLoop {
             .zip(meshes.into_iter().zip(cuts))
             .map(|((patch, (_, level)), (mesh, cut))| PatchLod {
                 level,
-                mesh: Arc::new(mesh),
+                // (No deadline: every job is done.)
+                mesh: Arc::new(mesh.unwrap_or_default()),
                 cache: Vec::new(),
                 wanted: view.eps_obj(&patch.bounds, options.pixel_error),
                 in_frustum: frustum.sees(&patch.bounds),
@@ -271,7 +270,6 @@ impl FrameLoop {
             options,
             levels,
             patches,
-            seconds_per_patch: 0.0,
             generation: 0,
             bvh: bvh_of(scene),
             bvh_for: scene_key(scene),
@@ -354,6 +352,7 @@ impl FrameLoop {
             self.bvh_for = scene_key(scene);
         }
         let frustum = view.frustum();
+        let eps_of = view.eps_of(opts.pixel_error);
         let mut seen = std::mem::take(&mut self.seen_next);
         seen.clear();
         self.bvh
@@ -367,7 +366,7 @@ impl FrameLoop {
             let (i, patch) = (i as usize, &scene.patches[i as usize]);
             let p = &mut self.patches[i];
             p.in_frustum = true;
-            p.wanted = view.eps_obj(&patch.bounds, opts.pixel_error);
+            p.wanted = eps_of.eps(&patch.bounds);
             stats.in_frustum += 1;
             let current = self.levels.eps(p.level);
             // (At the finest level there is nothing better to do: not queued.)
@@ -395,57 +394,28 @@ impl FrameLoop {
                 todo.push((i, level));
             }
         }
-        // Then tessellate from the top of the queue, a batch per round, within the budget.
-        let threads = rayon::current_num_threads().max(1);
-        let mut next = 0;
-        while next < todo.len() {
-            let elapsed = start.elapsed().as_secs_f64();
-            let left = opts.budget.as_secs_f64() - elapsed;
-            // Batch: what fits in the time left at the measured cost, at least one per worker
-            // on the first round (a frame always makes progress), then nothing past the budget.
-            let fit = if self.seconds_per_patch > 0.0 {
-                (left / self.seconds_per_patch * threads as f64).floor() as usize
-            } else {
-                threads
-            };
-            let batch = if next == 0 {
-                fit.max(1)
-            } else if left <= 0.0 {
-                0
-            } else {
-                fit
-            };
-            if batch == 0 {
-                break;
+        // Then tessellate from the top of the queue until the budget is spent: the workers
+        // take the jobs in queue order (one dispatch per frame, `shared::pull`).
+        let mut cuts: Vec<Option<CutState>> = todo
+            .iter()
+            .map(|&(i, _)| self.patches[i].cut.take())
+            .collect();
+        let saved = self.shared.saved;
+        let deadline = start + opts.budget;
+        let results = self
+            .shared
+            .tessellate(scene, &levels, &todo, &mut cuts, Some(deadline));
+        stats.copied += (self.shared.saved - saved) as usize;
+        for ((&(i, level), cut), mesh) in todo.iter().zip(cuts).zip(results) {
+            self.patches[i].cut = cut;
+            match mesh {
+                Some(mesh) => {
+                    self.patches[i].install(level, Arc::new(mesh), opts.cache_levels);
+                    stats.retessellated += 1;
+                }
+                None => stats.queue_left += 1,
             }
-            let end = (next + batch.min(4 * threads)).min(todo.len());
-            let jobs = &todo[next..end];
-            let t0 = Instant::now();
-            let mut cuts: Vec<Option<CutState>> = jobs
-                .iter()
-                .map(|&(i, _)| self.patches[i].cut.take())
-                .collect();
-            let saved = self.shared.saved;
-            let results = self.shared.tessellate(scene, &levels, jobs, &mut cuts);
-            stats.copied += (self.shared.saved - saved) as usize;
-            for (&(i, _), cut) in jobs.iter().zip(cuts) {
-                self.patches[i].cut = cut;
-            }
-            let dt = t0.elapsed().as_secs_f64();
-            // Cost per patch on one worker: the batch ran on min(jobs, threads) workers.
-            let per = dt * (jobs.len().min(threads) as f64) / jobs.len() as f64;
-            self.seconds_per_patch = if self.seconds_per_patch > 0.0 {
-                0.7 * self.seconds_per_patch + 0.3 * per
-            } else {
-                per
-            };
-            for (&(i, level), mesh) in jobs.iter().zip(results) {
-                self.patches[i].install(level, Arc::new(mesh), opts.cache_levels);
-                stats.retessellated += 1;
-            }
-            next = end;
         }
-        stats.queue_left = todo.len() - next;
         self.shared.end_frame();
         stats.tessellation = start.elapsed();
         if stats.retessellated + stats.from_cache > 0 || frustum_changed {

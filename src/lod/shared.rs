@@ -20,7 +20,9 @@
 //! [`KEEP_FRAMES`] frames is dropped. Mesh patches are never shared.
 
 use std::collections::{HashMap, HashSet};
-use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
 
 use rayon::prelude::*;
 
@@ -31,6 +33,9 @@ use crate::tessellate::{Instance, PatchMesh, Tessellators, instance_of, placed, 
 
 /// Frames a shared tessellation is kept without being asked for.
 pub const KEEP_FRAMES: u64 = 16;
+
+/// Jobs from which the placements are made on the rayon workers rather than in line.
+const PARALLEL_PLACEMENTS: usize = 4096;
 
 /// Bézier patches whose translated control points differ by at most this fraction of the
 /// model's diagonal share a tessellation.
@@ -111,76 +116,105 @@ impl SharedTessellations {
         self.keys.iter().filter(|k| k.is_some()).count()
     }
 
-    /// Tessellates patch `i` at level `l` for every `(i, l)` of `jobs`, in parallel: shared
-    /// surfaces once per level (or not at all when kept from an earlier frame), the others
-    /// on their own (mesh patches moving their cut in `cuts`, one per job).
+    /// Tessellates patch `i` at level `l` for every `(i, l)` of `jobs`, taken in order by
+    /// the rayon workers until `deadline` ([`pull`]): shared surfaces once per level (or not
+    /// at all when kept from an earlier frame), the others on their own (mesh patches moving
+    /// their cut in `cuts`, one per job). Per job its mesh, or `None` when the deadline came
+    /// first (its cut is then left as it was).
     pub(super) fn tessellate(
         &mut self,
         scene: &Scene,
         levels: &Levels,
         jobs: &[(usize, i32)],
         cuts: &mut [Option<CutState>],
-    ) -> Vec<PatchMesh> {
+        deadline: Option<Instant>,
+    ) -> Vec<Option<PatchMesh>> {
+        /// One piece of work: a shared surface's tessellation at a level (from its class's
+        /// first patch), or job `k`'s own tessellation with its cut.
+        enum Work {
+            Shared((SurfaceKey, i32), usize),
+            Own(usize, Mutex<Option<CutState>>),
+        }
         let frame = self.frame;
-        let mut missing = Vec::new();
+        let mut work = Vec::new();
         let mut asked = HashSet::new();
-        let mut copies = 0u64;
-        for &(i, level) in jobs {
-            let Some(share) = self.keys.get(i).copied().flatten() else {
-                continue;
-            };
-            copies += 1;
-            let key = (share.key, level);
-            match self.meshes.get_mut(&key) {
-                Some(entry) => entry.1 = frame,
-                None => {
-                    if asked.insert(key) {
-                        missing.push((key, share.source as usize));
+        for (k, &(i, level)) in jobs.iter().enumerate() {
+            match self.keys.get(i).copied().flatten() {
+                Some(share) => {
+                    let key = (share.key, level);
+                    match self.meshes.get_mut(&key) {
+                        Some(entry) => entry.1 = frame,
+                        None => {
+                            if asked.insert(key) {
+                                work.push(Work::Shared(key, share.source as usize));
+                            }
+                        }
                     }
+                }
+                None => work.push(Work::Own(k, Mutex::new(cuts[k].take()))),
+            }
+        }
+        let made = pull(work.len(), deadline, |t, w| {
+            let mut mesh = PatchMesh::default();
+            match &work[w] {
+                Work::Shared((key, level), i) => {
+                    let (patch, eps) = (&scene.patches[*i], levels.eps(*level));
+                    match key {
+                        SurfaceKey::Placed(..) => t.unplaced(patch, eps, &mut mesh),
+                        SurfaceKey::Translated(_) => t.patch(patch, eps, &mut mesh),
+                    }
+                }
+                Work::Own(k, cut) => {
+                    let (i, level) = jobs[*k];
+                    let mut cut = cut.lock().unwrap_or_else(|e| e.into_inner());
+                    t.patch_from(&scene.patches[i], levels.eps(level), &mut cut, &mut mesh);
+                }
+            }
+            mesh
+        });
+        let mut out: Vec<Option<PatchMesh>> = (0..jobs.len()).map(|_| None).collect();
+        let mut made_shared = 0u64;
+        for (w, mesh) in work.into_iter().zip(made) {
+            match w {
+                Work::Shared(key, _) => {
+                    if let Some(mesh) = mesh {
+                        made_shared += 1;
+                        self.meshes.insert(key, (Arc::new(mesh), frame));
+                    }
+                }
+                Work::Own(k, cut) => {
+                    cuts[k] = cut.into_inner().unwrap_or_else(|e| e.into_inner());
+                    out[k] = mesh;
                 }
             }
         }
-        let made: Vec<PatchMesh> = missing
-            .par_iter()
-            .map_init(Tessellators::new, |t, &((key, level), i)| {
-                let mut mesh = PatchMesh::default();
-                match key {
-                    SurfaceKey::Placed(..) => {
-                        t.unplaced(&scene.patches[i], levels.eps(level), &mut mesh)
-                    }
-                    SurfaceKey::Translated(_) => {
-                        t.patch(&scene.patches[i], levels.eps(level), &mut mesh)
-                    }
-                }
-                mesh
-            })
-            .collect();
-        self.made += made.len() as u64;
-        self.saved += copies - made.len() as u64;
-        for ((key, _), mesh) in missing.into_iter().zip(made) {
-            self.meshes.insert(key, (Arc::new(mesh), frame));
-        }
+        // The placements: an instance each of its class's tessellation, when there is one.
         let (keys, meshes) = (&self.keys, &self.meshes);
-        jobs.par_iter()
-            .zip(cuts.par_iter_mut())
-            .map_init(Tessellators::new, |t, (&(i, level), cut)| {
+        let place = |(k, slot): (usize, &mut Option<PatchMesh>)| {
+            let (i, level) = jobs[k];
+            if let Some(share) = keys.get(i).copied().flatten()
+                && let Some((shared, _)) = meshes.get(&(share.key, level))
+            {
                 let patch = &scene.patches[i];
-                match keys.get(i).copied().flatten() {
-                    Some(share) => {
-                        let shared = &meshes[&(share.key, level)].0;
-                        match share.key {
-                            SurfaceKey::Placed(..) => placed(shared, patch),
-                            SurfaceKey::Translated(_) => translated(shared, patch, &share),
-                        }
-                    }
-                    None => {
-                        let mut mesh = PatchMesh::default();
-                        t.patch_from(patch, levels.eps(level), cut, &mut mesh);
-                        mesh
-                    }
-                }
-            })
-            .collect()
+                *slot = Some(match share.key {
+                    SurfaceKey::Placed(..) => placed(shared, patch),
+                    SurfaceKey::Translated(_) => translated(shared, patch, &share),
+                });
+            }
+        };
+        if jobs.len() >= PARALLEL_PLACEMENTS {
+            out.par_iter_mut().enumerate().for_each(place);
+        } else {
+            out.iter_mut().enumerate().for_each(place);
+        }
+        let copies = jobs
+            .iter()
+            .zip(&out)
+            .filter(|((i, _), m)| m.is_some() && self.keys.get(*i).copied().flatten().is_some())
+            .count() as u64;
+        self.made += made_shared;
+        self.saved += copies.saturating_sub(made_shared);
+        out
     }
 
     /// Bytes of the shared tessellations kept but not in `used` (addresses of those an
@@ -267,5 +301,81 @@ fn translated_classes(scene: &Scene, keys: &mut [Option<Share>]) {
             delta,
             deviation,
         });
+    }
+}
+
+/// Runs `f(scratch, k)` for `k` in `0..n`, in order of `k`, on every rayon worker: each takes
+/// the next `k` until all are taken or `deadline` has passed — after its first one, so a
+/// frame always makes progress. One parallel dispatch per call, and the top of the queue is
+/// done first: a budget cuts the end of the list, not the end of each worker's share of it.
+/// Per `k`, what `f` made, or `None` when the deadline came first.
+pub(super) fn pull<T: Send>(
+    n: usize,
+    deadline: Option<Instant>,
+    f: impl Fn(&mut Tessellators, usize) -> T + Sync,
+) -> Vec<Option<T>> {
+    let mut out: Vec<Option<T>> = (0..n).map(|_| None).collect();
+    if n == 0 {
+        return out;
+    }
+    let next = AtomicUsize::new(0);
+    let workers = rayon::current_num_threads().clamp(1, n);
+    let done: Vec<Vec<(usize, T)>> = (0..workers)
+        .into_par_iter()
+        .with_max_len(1)
+        .map(|_| {
+            let mut scratch = Tessellators::new();
+            let mut made = Vec::new();
+            loop {
+                if !made.is_empty() && deadline.is_some_and(|d| Instant::now() >= d) {
+                    break made;
+                }
+                let k = next.fetch_add(1, Ordering::Relaxed);
+                if k >= n {
+                    break made;
+                }
+                made.push((k, f(&mut scratch, k)));
+            }
+        })
+        .collect();
+    for (k, v) in done.into_iter().flatten() {
+        out[k] = Some(v);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::time::Duration;
+
+    /// Without a deadline every job is done; with one already past, each worker does one
+    /// job, from the top.
+    #[test]
+    fn pull_does_all_or_the_top_of_the_list() {
+        let all = pull(1000, None, |_, k| k * 2);
+        assert!(all.iter().enumerate().all(|(k, v)| *v == Some(2 * k)));
+        let past = Instant::now() - Duration::from_millis(1);
+        let some = pull(1000, Some(past), |_, k| k);
+        let done: Vec<usize> = some.iter().flatten().copied().collect();
+        let workers = rayon::current_num_threads();
+        assert!(!done.is_empty() && done.len() <= workers, "{done:?}");
+        assert!(done.iter().all(|&k| k < workers), "{done:?}");
+    }
+
+    /// Cut by a deadline mid-way, the jobs done are the top of the list (up to one job in
+    /// flight per worker): the budget cuts the end of the queue, not each worker's half.
+    #[test]
+    fn a_deadline_cuts_the_end_of_the_list() {
+        let deadline = Instant::now() + Duration::from_millis(30);
+        let out = pull(100_000, Some(deadline), |_, k| {
+            std::thread::sleep(Duration::from_micros(200));
+            k
+        });
+        let done: Vec<usize> = out.iter().flatten().copied().collect();
+        let n = done.len();
+        assert!(n > 0 && n < 100_000, "{n} done");
+        let workers = rayon::current_num_threads();
+        assert!(done.iter().all(|&k| k < n + workers), "{done:?}");
     }
 }

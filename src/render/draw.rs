@@ -65,8 +65,7 @@ impl Renderer {
                 b: 0.0,
                 a: 0.0,
             };
-            let raw = self.draw(meshes, &globals, opts, Target::Depth, w, h, no)?;
-            let bits: Vec<u32> = bytemuck::pod_collect_to_vec::<u8, u32>(&raw);
+            let bits: Vec<u32> = self.draw(meshes, &globals, opts, Target::Depth, w, h, no)?;
             Some(
                 bits.into_iter()
                     .map(|b| {
@@ -88,8 +87,7 @@ impl Renderer {
                 b: 0.0,
                 a: 0.0,
             };
-            let raw = self.draw(meshes, &globals, opts, Target::Ids, w, h, none)?;
-            Some(bytemuck::pod_collect_to_vec::<u8, u32>(&raw))
+            Some(self.draw(meshes, &globals, opts, Target::Ids, w, h, none)?)
         } else {
             None
         };
@@ -139,9 +137,10 @@ impl Renderer {
         }
     }
 
-    /// One pass into a fresh target; returns the unpadded bytes of the (resolved) colour target.
+    /// One pass into a fresh target; returns the unpadded texels of the (resolved) colour
+    /// target, as bytes or 32-bit words.
     #[allow(clippy::too_many_arguments)]
-    pub(super) fn draw(
+    pub(super) fn draw<T: bytemuck::Pod>(
         &mut self,
         meshes: Geometry<'_>,
         globals: &Globals,
@@ -150,7 +149,7 @@ impl Renderer {
         w: u32,
         h: u32,
         clear: wgpu::Color,
-    ) -> Result<Vec<u8>, RenderError> {
+    ) -> Result<Vec<T>, RenderError> {
         self.pipelines(target);
         if self.targets.get(&target).is_none_or(|t| t.size != (w, h)) {
             let t = Targets::new(&self.gpu, &self.bind_layout, target, w, h);

@@ -4,14 +4,15 @@ use super::pipelines::*;
 use super::*;
 
 /// Copies the resolved target into the readback buffer (rows padded to
-/// `COPY_BYTES_PER_ROW_ALIGNMENT`, 256), maps it and strips the padding. Adds the time
-/// blocked waiting for the GPU (the poll until the buffer is mapped) to `gpu_wait`.
-pub(super) fn read_texture(
+/// `COPY_BYTES_PER_ROW_ALIGNMENT`, 256), maps it and strips the padding, into texels of type
+/// `T` (bytes, or the 32-bit texels of the ID and depth targets: no second copy). Adds the
+/// time blocked waiting for the GPU (the poll until the buffer is mapped) to `gpu_wait`.
+pub(super) fn read_texture<T: bytemuck::Pod>(
     gpu: &Gpu,
     mut encoder: wgpu::CommandEncoder,
     targets: &Targets,
     gpu_wait: &mut std::time::Duration,
-) -> Result<Vec<u8>, RenderError> {
+) -> Result<Vec<T>, RenderError> {
     let (w, h) = targets.size;
     let (unpadded, padded) = (targets.row_bytes, targets.padded_row_bytes);
     let (texture, buffer) = (&targets.resolved, &targets.readback);
@@ -48,10 +49,17 @@ pub(super) fn read_texture(
     rx.recv()
         .map_err(|e| RenderError::Readback(e.to_string()))?
         .map_err(|e| RenderError::Readback(e.to_string()))?;
-    let mut out = Vec::with_capacity((unpadded * h) as usize);
+    let bytes = (unpadded * h) as usize;
+    let mut out: Vec<T> = vec![T::zeroed(); bytes / size_of::<T>()];
     let copied = buffer.get_mapped_range(..).map(|data| {
-        for row in data.chunks_exact(padded as usize) {
-            out.extend_from_slice(&row[..unpadded as usize]);
+        let dst: &mut [u8] = bytemuck::cast_slice_mut(&mut out);
+        if padded == unpadded {
+            dst.copy_from_slice(&data[..bytes]);
+        } else {
+            let rows = data.chunks_exact(padded as usize);
+            for (to, row) in dst.chunks_exact_mut(unpadded as usize).zip(rows) {
+                to.copy_from_slice(&row[..unpadded as usize]);
+            }
         }
     });
     // Unmapped whatever happened: the buffer is reused by the next frame.

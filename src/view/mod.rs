@@ -220,9 +220,22 @@ impl View {
     /// Object-space size of one pixel at distance `d` from the eye (the same at every
     /// distance under an orthographic projection).
     pub fn pixel_size_at(&self, d: f64) -> f64 {
-        match self.projection {
-            Projection::Perspective => d * 2.0 * (self.fov_y * 0.5).tan() / self.height as f64,
-            Projection::Orthographic { height } => height / self.height as f64,
+        self.eps_of(1.0).pixel_size_at(d)
+    }
+
+    /// [`View::eps_obj`] at `pixel_error` for many spheres, the view's constants computed
+    /// once (the same arithmetic, so the same values).
+    pub fn eps_of(&self, pixel_error: f64) -> EpsOf {
+        EpsOf {
+            eye: self.eye,
+            near: self.near,
+            pixel_error,
+            tan: (self.fov_y * 0.5).tan(),
+            height: self.height as f64,
+            ortho: match self.projection {
+                Projection::Perspective => None,
+                Projection::Orthographic { height } => Some(height),
+            },
         }
     }
 
@@ -241,8 +254,7 @@ impl View {
     /// assert!((eps - 0.5 / 30.0).abs() < 1e-12);
     /// ```
     pub fn eps_obj(&self, s: &Sphere, pixel_error: f64) -> f64 {
-        let d = (s.center.distance(self.eye) - s.radius).max(self.near);
-        pixel_error * self.pixel_size_at(d)
+        self.eps_of(pixel_error).eps(s)
     }
 
     /// Linear view-space depth of a world point (distance along the viewing axis).
@@ -295,6 +307,36 @@ impl View {
     }
 }
 
+/// [`View::eps_obj`] with the view's constants computed once ([`View::eps_of`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EpsOf {
+    eye: DVec3,
+    near: f64,
+    pixel_error: f64,
+    /// tan(fov_y / 2).
+    tan: f64,
+    /// The image height, pixels.
+    height: f64,
+    /// Orthographic projections: the view's height, world units.
+    ortho: Option<f64>,
+}
+
+impl EpsOf {
+    /// ε for a patch with bounding sphere `s` (see [`View::eps_obj`]).
+    pub fn eps(&self, s: &Sphere) -> f64 {
+        let d = (s.center.distance(self.eye) - s.radius).max(self.near);
+        self.pixel_error * self.pixel_size_at(d)
+    }
+
+    /// [`View::pixel_size_at`].
+    fn pixel_size_at(&self, d: f64) -> f64 {
+        match self.ortho {
+            None => d * 2.0 * self.tan / self.height,
+            Some(height) => height / self.height,
+        }
+    }
+}
+
 /// A view frustum ready for many sphere tests ([`View::frustum`]): side planes
 /// `|x| = ox + tx · depth` and `|y| = oy + ty · depth` in view space (through the eye under
 /// perspective, parallel to the axis under an orthographic projection), and the near and far
@@ -325,6 +367,19 @@ impl Frustum {
         // Distance outside the side plane `|a| = o + t · depth`.
         let within = |a: f64, o: f64, t: f64, n: f64| (a.abs() - o - t * depth) / n <= s.radius;
         within(c.x, self.ox, self.tx, self.nx) && within(c.y, self.oy, self.ty, self.ny)
+    }
+
+    /// Whether the sphere `s` lies wholly inside the frustum (on the inner side of every
+    /// plane by at least its radius): then so does every sphere inside it, and each of those
+    /// passes [`Frustum::sees`].
+    pub fn contains(&self, s: &Sphere) -> bool {
+        let c = (self.view * s.center.extend(1.0)).truncate();
+        let depth = -c.z;
+        if depth - s.radius < self.near || depth + s.radius > self.far {
+            return false;
+        }
+        let inside = |a: f64, o: f64, t: f64, n: f64| (a.abs() - o - t * depth) / n <= -s.radius;
+        inside(c.x, self.ox, self.tx, self.nx) && inside(c.y, self.oy, self.ty, self.ny)
     }
 }
 
