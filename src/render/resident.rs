@@ -584,13 +584,13 @@ impl ResidentGeometry {
                 }
             }
         }
-        stats.geometry_bytes += self.write(gpu, &built);
+        stats.geometry_bytes += self.write(&built);
         let fresh: std::collections::HashSet<usize> = built.iter().map(|b| b.slot).collect();
         drop(built);
         moved.retain(|i| !fresh.contains(i));
         self.reindex(renderer, moved, stats);
         // Staged writes go to the GPU now, so their staging memory can be reused.
-        gpu.queue.submit([]);
+        self.flush(gpu);
         Ok(())
     }
 
@@ -607,7 +607,7 @@ impl ResidentGeometry {
                     Some(Built::new(renderer, i, mesh, s.strips.clone(), true))
                 })
                 .collect();
-            stats.reindexed_bytes += self.write(&renderer.gpu, &reindexed);
+            stats.reindexed_bytes += self.write(&reindexed);
         }
     }
 
@@ -676,37 +676,50 @@ impl ResidentGeometry {
         }
     }
 
-    /// Writes the streams of `built` (index streams only for re-indexed patches), each
-    /// pool's contiguous ranges in one `write_buffer`. Returns the bytes written.
-    fn write(&self, gpu: &Gpu, built: &[Built]) -> u64 {
+    /// Stages the streams of `built` (index streams only for re-indexed patches), each
+    /// pool's contiguous ranges as one run ([`Pool::write`]; written by
+    /// [`ResidentGeometry::flush`]). Returns the bytes staged.
+    fn write(&mut self, built: &[Built]) -> u64 {
         let mut written = 0;
         let vertex_stream = |p: usize| p == VERTICES || p == POINTS;
-        for (a, arena) in self.arenas.iter().enumerate() {
-            for (p, pool) in arena.pools.iter().enumerate() {
+        let slots = &self.slots;
+        for (a, arena) in self.arenas.iter_mut().enumerate() {
+            for (p, pool) in arena.pools.iter_mut().enumerate() {
                 let mut items: Vec<(u64, &Built)> = built
                     .iter()
                     .filter(|b| !(b.reindex && vertex_stream(p)))
-                    .filter(|b| self.slots[b.slot].arena == a)
-                    .filter_map(|b| Some((self.slots[b.slot].ranges[p]?.0, b)))
+                    .filter(|b| slots[b.slot].arena == a)
+                    .filter_map(|b| Some((slots[b.slot].ranges[p]?.0, b)))
                     .collect();
                 items.sort_unstable_by_key(|x| x.0);
                 let mut run: Option<u64> = None;
                 let mut bytes = Vec::new();
                 for (start, b) in items {
                     if run.is_some_and(|r| r + bytes.len() as u64 / pool.unit != start) {
-                        written += pool.write(gpu, run.unwrap_or(0), &bytes);
+                        written += pool.write(run.unwrap_or(0), &bytes);
                         bytes.clear();
                         run = None;
                     }
                     run.get_or_insert(start);
-                    b.append(p, &self.slots[b.slot], &mut bytes);
+                    b.append(p, &slots[b.slot], &mut bytes);
                 }
                 if let Some(r) = run {
-                    written += pool.write(gpu, r, &bytes);
+                    written += pool.write(r, &bytes);
                 }
             }
         }
         written
+    }
+
+    /// Writes every pool's staged bytes (one staging buffer and submission per pool with
+    /// writes, [`Pool::flush`]).
+    fn flush(&mut self, gpu: &Gpu) {
+        for arena in &mut self.arenas {
+            for pool in &mut arena.pools {
+                pool.flush(gpu);
+            }
+        }
+        self.placed.flush(gpu);
     }
 
     /// The draw list of `drawn` (see the module doc), with its indirect arguments. When the
@@ -732,6 +745,8 @@ impl ResidentGeometry {
         self.draws = d;
         self.placed.collect(&self.slots, drawn);
         self.placed.write(renderer, stats);
+        // Every staged write (geometry, re-indexed streams, records) goes before a draw.
+        self.flush(&renderer.gpu);
     }
 
     /// Merged draws of the current draw list (all streams, static ranges included).

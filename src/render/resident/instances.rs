@@ -214,7 +214,7 @@ impl ResidentGeometry {
             };
             writes.push((at, record));
         }
-        self.placed.write_records(renderer, writes, stats);
+        self.placed.write_records(writes, stats);
         Ok(build)
     }
 
@@ -308,14 +308,16 @@ impl PlacedDraws {
         }
     }
 
-    /// Writes `records` at their indices, each run of consecutive indices at once.
-    fn write_records(
-        &self,
-        renderer: &Renderer,
-        mut records: Vec<(u64, InstanceRecord)>,
-        stats: &mut UploadStats,
-    ) {
-        let Some((pool, _)) = &self.records else {
+    /// Writes the staged records ([`Pool::flush`]).
+    pub(super) fn flush(&mut self, gpu: &crate::render::Gpu) {
+        if let Some((pool, _)) = &mut self.records {
+            pool.flush(gpu);
+        }
+    }
+
+    /// Stages `records` at their indices, each run of consecutive indices at once.
+    fn write_records(&mut self, mut records: Vec<(u64, InstanceRecord)>, stats: &mut UploadStats) {
+        let Some((pool, _)) = &mut self.records else {
             return;
         };
         records.sort_unstable_by_key(|r| r.0);
@@ -327,8 +329,7 @@ impl PlacedDraws {
             }
             k += 1;
             let run: Vec<InstanceRecord> = records[start..k].iter().map(|r| r.1).collect();
-            stats.instance_bytes +=
-                pool.write(&renderer.gpu, records[start].0, bytemuck::cast_slice(&run));
+            stats.instance_bytes += pool.write(records[start].0, bytemuck::cast_slice(&run));
         }
     }
 

@@ -2,6 +2,12 @@
 //! copy (`copy_buffer_to_buffer`, ranges keep their addresses) up to a largest size (the
 //! device's largest buffer or binding; past it the caller opens another arena), compaction
 //! into a new buffer (ranges move; the caller fixes what refers to them).
+//!
+//! Writes are staged: [`Pool::write`] keeps the bytes, [`Pool::flush`] puts a frame's writes
+//! in one staging buffer and copies each run from it (wgpu's `Queue::write_buffer` makes a
+//! staging buffer per call; thousands of scattered instance records a frame made that most
+//! of the upload's CPU time). Growth keeps every address, so writes staged before it land in
+//! the new buffer, after the growth's copy; compaction moves ranges, so it flushes first.
 
 use super::alloc::{Allocator, Move};
 use crate::render::{Gpu, RenderError};
@@ -20,6 +26,10 @@ pub(crate) struct Pool {
     pub(crate) max_units: u64,
     pub(crate) buffer: wgpu::Buffer,
     pub(crate) alloc: Allocator,
+    /// Staged writes: their bytes, and per run (byte offset in the buffer, offset in
+    /// `pending`, length).
+    pending: Vec<u8>,
+    runs: Vec<(u64, u64, u64)>,
 }
 
 impl Pool {
@@ -41,6 +51,8 @@ impl Pool {
             max_units,
             buffer: buffer(gpu, label, usage, unit * first),
             alloc: Allocator::new(first),
+            pending: Vec::new(),
+            runs: Vec::new(),
         }
     }
 
@@ -87,6 +99,7 @@ impl Pool {
         gpu: &Gpu,
         order: impl IntoIterator<Item = u64>,
     ) -> (Vec<Move>, u64) {
+        self.flush(gpu);
         let before: Vec<(u64, u64)> = self.alloc.live().collect();
         let moves = self.alloc.compact(order);
         let moved: std::collections::HashMap<u64, u64> =
@@ -141,13 +154,55 @@ impl Pool {
         self.alloc.capacity() * self.unit
     }
 
-    /// Writes `bytes` at unit `start`; returns the bytes written.
-    pub(crate) fn write(&self, gpu: &Gpu, start: u64, bytes: &[u8]) -> u64 {
+    /// Stages `bytes` for unit `start` (written by the next [`Pool::flush`]); returns the
+    /// bytes staged.
+    pub(crate) fn write(&mut self, start: u64, bytes: &[u8]) -> u64 {
         if !bytes.is_empty() {
-            gpu.queue
-                .write_buffer(&self.buffer, start * self.unit, bytes);
+            let at = start * self.unit;
+            let from = self.pending.len() as u64;
+            let len = bytes.len() as u64;
+            self.pending.extend_from_slice(bytes);
+            match self.runs.last_mut() {
+                // A run continuing the last one in both buffers: one copy.
+                Some((to, f, l)) if *to + *l == at && *f + *l == from => *l += len,
+                _ => self.runs.push((at, from, len)),
+            }
         }
         bytes.len() as u64
+    }
+
+    /// Writes the staged bytes: one staging buffer, one copy per run, one submission.
+    pub(crate) fn flush(&mut self, gpu: &Gpu) {
+        if self.runs.is_empty() {
+            return;
+        }
+        // Every unit is a multiple of 4 bytes (`COPY_BUFFER_ALIGNMENT`), so are the runs.
+        let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("staged writes"),
+            size: self.pending.len() as u64,
+            usage: wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: true,
+        });
+        let mapped = staging
+            .slice(..)
+            .get_mapped_range_mut()
+            .map(|mut view| view.copy_from_slice(&self.pending));
+        staging.unmap();
+        if mapped.is_ok() {
+            let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            for &(to, from, len) in &self.runs {
+                encoder.copy_buffer_to_buffer(&staging, from, &self.buffer, to, len);
+            }
+            gpu.queue.submit([encoder.finish()]);
+        } else {
+            // (A buffer mapped at creation maps; should it not, the slow way still writes.)
+            for &(to, from, len) in &self.runs {
+                let bytes = &self.pending[from as usize..(from + len) as usize];
+                gpu.queue.write_buffer(&self.buffer, to, bytes);
+            }
+        }
+        self.pending.clear();
+        self.runs.clear();
     }
 }
 
@@ -158,4 +213,56 @@ fn buffer(gpu: &Gpu, label: &str, usage: wgpu::BufferUsages, size: u64) -> wgpu:
         usage,
         mapped_at_creation: false,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The pool's buffer as words (a copy into a mapped buffer).
+    fn read(gpu: &Gpu, pool: &Pool) -> Vec<u32> {
+        let size = pool.bytes();
+        let out = buffer(
+            gpu,
+            "read back",
+            wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            size,
+        );
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(&pool.buffer, 0, &out, 0, size);
+        gpu.queue.submit([encoder.finish()]);
+        out.map_async(wgpu::MapMode::Read, .., |r| r.expect("maps"));
+        gpu.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .expect("polls");
+        let words = bytemuck::cast_slice(&out.get_mapped_range(..).expect("mapped")).to_vec();
+        out.unmap();
+        words
+    }
+
+    /// Writes staged before a growth or a compaction are in the new buffer: growth keeps
+    /// addresses (the flush after it writes there), compaction flushes first (the update
+    /// flushes before either today, so only this test sees it).
+    #[test]
+    fn staged_writes_survive_growth_and_compaction() {
+        let gpu = Gpu::new().expect("a wgpu adapter (lavapipe or llvmpipe, see README)");
+        let mut pool = Pool::new(&gpu, "test", wgpu::BufferUsages::STORAGE, 4, 1 << 24);
+        let gap = pool.alloc.alloc(10).expect("room");
+        let a = pool.alloc.alloc(MIN_CAPACITY - 10).expect("room");
+        let words: Vec<u32> = (0..MIN_CAPACITY as u32 - 10).collect();
+        pool.write(a, bytemuck::cast_slice(&words));
+        pool.reserve(&gpu, 100).expect("grows");
+        assert!(pool.alloc.capacity() > MIN_CAPACITY);
+        pool.flush(&gpu);
+        let got = read(&gpu, &pool);
+        assert_eq!(&got[a as usize..MIN_CAPACITY as usize], &words[..]);
+        pool.alloc.free_range(gap);
+        pool.write(a, bytemuck::cast_slice(&[7u32; 4]));
+        let (moves, _) = pool.compact(&gpu, [a]);
+        let to = moves.iter().find(|m| m.from == a).map_or(a, |m| m.to);
+        pool.flush(&gpu);
+        let got = read(&gpu, &pool);
+        assert_eq!(&got[to as usize..to as usize + 4], &[7; 4]);
+        assert_eq!(&got[to as usize + 4..to as usize + 20], &words[4..20]);
+    }
 }
