@@ -584,7 +584,7 @@ impl ResidentGeometry {
                 }
             }
         }
-        stats.geometry_bytes += self.write(&built);
+        stats.geometry_bytes += self.write(gpu, &built);
         let fresh: std::collections::HashSet<usize> = built.iter().map(|b| b.slot).collect();
         drop(built);
         moved.retain(|i| !fresh.contains(i));
@@ -607,7 +607,7 @@ impl ResidentGeometry {
                     Some(Built::new(renderer, i, mesh, s.strips.clone(), true))
                 })
                 .collect();
-            stats.reindexed_bytes += self.write(&reindexed);
+            stats.reindexed_bytes += self.write(&renderer.gpu, &reindexed);
         }
     }
 
@@ -679,7 +679,7 @@ impl ResidentGeometry {
     /// Stages the streams of `built` (index streams only for re-indexed patches), each
     /// pool's contiguous ranges as one run ([`Pool::write`]; written by
     /// [`ResidentGeometry::flush`]). Returns the bytes staged.
-    fn write(&mut self, built: &[Built]) -> u64 {
+    fn write(&mut self, gpu: &Gpu, built: &[Built]) -> u64 {
         let mut written = 0;
         let vertex_stream = |p: usize| p == VERTICES || p == POINTS;
         let slots = &self.slots;
@@ -696,7 +696,7 @@ impl ResidentGeometry {
                 let mut bytes = Vec::new();
                 for (start, b) in items {
                     if run.is_some_and(|r| r + bytes.len() as u64 / pool.unit != start) {
-                        written += pool.write(run.unwrap_or(0), &bytes);
+                        written += pool.write(gpu, run.unwrap_or(0), &bytes);
                         bytes.clear();
                         run = None;
                     }
@@ -704,7 +704,7 @@ impl ResidentGeometry {
                     b.append(p, &slots[b.slot], &mut bytes);
                 }
                 if let Some(r) = run {
-                    written += pool.write(r, &bytes);
+                    written += pool.write(gpu, r, &bytes);
                 }
             }
         }

@@ -214,7 +214,7 @@ impl ResidentGeometry {
             };
             writes.push((at, record));
         }
-        self.placed.write_records(writes, stats);
+        self.placed.write_records(&renderer.gpu, writes, stats);
         Ok(build)
     }
 
@@ -316,7 +316,12 @@ impl PlacedDraws {
     }
 
     /// Stages `records` at their indices, each run of consecutive indices at once.
-    fn write_records(&mut self, mut records: Vec<(u64, InstanceRecord)>, stats: &mut UploadStats) {
+    fn write_records(
+        &mut self,
+        gpu: &crate::render::Gpu,
+        mut records: Vec<(u64, InstanceRecord)>,
+        stats: &mut UploadStats,
+    ) {
         let Some((pool, _)) = &mut self.records else {
             return;
         };
@@ -329,7 +334,7 @@ impl PlacedDraws {
             }
             k += 1;
             let run: Vec<InstanceRecord> = records[start..k].iter().map(|r| r.1).collect();
-            stats.instance_bytes += pool.write(records[start].0, bytemuck::cast_slice(&run));
+            stats.instance_bytes += pool.write(gpu, records[start].0, bytemuck::cast_slice(&run));
         }
     }
 

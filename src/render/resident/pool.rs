@@ -12,6 +12,9 @@
 use super::alloc::{Allocator, Move};
 use crate::render::{Gpu, RenderError};
 
+/// Most bytes a pool stages before it writes them.
+const STAGED_BYTES: usize = 8 << 20;
+
 /// Units a new pool holds (empty buffers cannot be bound).
 const MIN_CAPACITY: u64 = 1024;
 
@@ -154,9 +157,13 @@ impl Pool {
         self.alloc.capacity() * self.unit
     }
 
-    /// Stages `bytes` for unit `start` (written by the next [`Pool::flush`]); returns the
-    /// bytes staged.
-    pub(crate) fn write(&mut self, start: u64, bytes: &[u8]) -> u64 {
+    /// Stages `bytes` for unit `start` (written by the next [`Pool::flush`], or now when
+    /// more than [`STAGED_BYTES`] are staged: a whole upload of a large scene is not held
+    /// twice); returns the bytes staged.
+    pub(crate) fn write(&mut self, gpu: &Gpu, start: u64, bytes: &[u8]) -> u64 {
+        if self.pending.len() + bytes.len() > STAGED_BYTES {
+            self.flush(gpu);
+        }
         if !bytes.is_empty() {
             let at = start * self.unit;
             let from = self.pending.len() as u64;
@@ -250,14 +257,14 @@ mod tests {
         let gap = pool.alloc.alloc(10).expect("room");
         let a = pool.alloc.alloc(MIN_CAPACITY - 10).expect("room");
         let words: Vec<u32> = (0..MIN_CAPACITY as u32 - 10).collect();
-        pool.write(a, bytemuck::cast_slice(&words));
+        pool.write(&gpu, a, bytemuck::cast_slice(&words));
         pool.reserve(&gpu, 100).expect("grows");
         assert!(pool.alloc.capacity() > MIN_CAPACITY);
         pool.flush(&gpu);
         let got = read(&gpu, &pool);
         assert_eq!(&got[a as usize..MIN_CAPACITY as usize], &words[..]);
         pool.alloc.free_range(gap);
-        pool.write(a, bytemuck::cast_slice(&[7u32; 4]));
+        pool.write(&gpu, a, bytemuck::cast_slice(&[7u32; 4]));
         let (moves, _) = pool.compact(&gpu, [a]);
         let to = moves.iter().find(|m| m.from == a).map_or(a, |m| m.to);
         pool.flush(&gpu);
