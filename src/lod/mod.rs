@@ -12,8 +12,8 @@
 //!
 //! (the paper's ε_act is our current ε_c, its ε_c our wanted ε_w), and are re-tessellated from
 //! the top until the frame's time budget (default 40 ms, as in the paper) is spent, by the
-//! rayon workers, which take the jobs in queue order. Fat borders always use each patch's *current* ε_c, so the picture stays
-//! crack-free while the queue catches up.
+//! rayon workers, which take the jobs in queue order. Fat borders always use each patch's
+//! *current* ε_c, so the picture stays crack-free while the queue catches up.
 //!
 //! **Levels and hysteresis** (Pajon, "LOD overview", on avoiding flicker between levels):
 //! tessellations are made only at discrete errors ε_k = unit · √2^k, the largest one ≤ ε_w,
