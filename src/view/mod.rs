@@ -359,27 +359,27 @@ impl Frustum {
     /// Whether the sphere `s` reaches into the frustum (within its radius of every plane's
     /// inner side): conservative, what frustum culling keeps.
     pub fn sees(&self, s: &Sphere) -> bool {
-        let c = (self.view * s.center.extend(1.0)).truncate();
-        let depth = -c.z;
-        if depth + s.radius < self.near || depth - s.radius > self.far {
-            return false;
-        }
-        // Distance outside the side plane `|a| = o + t · depth`.
-        let within = |a: f64, o: f64, t: f64, n: f64| (a.abs() - o - t * depth) / n <= s.radius;
-        within(c.x, self.ox, self.tx, self.nx) && within(c.y, self.oy, self.ty, self.ny)
+        self.within(s.center, s.radius)
     }
 
     /// Whether the sphere `s` lies wholly inside the frustum (on the inner side of every
     /// plane by at least its radius): then so does every sphere inside it, and each of those
     /// passes [`Frustum::sees`].
     pub fn contains(&self, s: &Sphere) -> bool {
-        let c = (self.view * s.center.extend(1.0)).truncate();
+        self.within(s.center, -s.radius)
+    }
+
+    /// Whether `center` lies at most `margin` outside every plane (inside by at least
+    /// `-margin` when it is negative).
+    fn within(&self, center: DVec3, margin: f64) -> bool {
+        let c = (self.view * center.extend(1.0)).truncate();
         let depth = -c.z;
-        if depth - s.radius < self.near || depth + s.radius > self.far {
+        if depth + margin < self.near || depth - margin > self.far {
             return false;
         }
-        let inside = |a: f64, o: f64, t: f64, n: f64| (a.abs() - o - t * depth) / n <= -s.radius;
-        inside(c.x, self.ox, self.tx, self.nx) && inside(c.y, self.oy, self.ty, self.ny)
+        // Distance outside the side plane `|a| = o + t · depth`.
+        let side = |a: f64, o: f64, t: f64, n: f64| (a.abs() - o - t * depth) / n <= margin;
+        side(c.x, self.ox, self.tx, self.nx) && side(c.y, self.oy, self.ty, self.ny)
     }
 }
 
