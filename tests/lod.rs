@@ -73,17 +73,21 @@ fn every_frame_is_crack_free_while_the_queue_is_behind() {
 }
 
 #[test]
-fn with_a_normal_budget_the_jump_converges_at_once() {
+fn with_a_budget_to_spare_the_jump_converges_at_once() {
     let mut renderer = common::renderer();
     let scene = common::teapot();
+    // A budget no frame reaches (32 patches re-tessellate in a few ms): what is checked is the
+    // queue's rule, not this machine's speed, which a test on a loaded 2-core runner cannot
+    // hold to a wall-clock budget (issue 34). Frame times at the 40 ms budget are measured by
+    // `patchwork bench --flythrough` and benches/frame.rs.
     let (records, summary) = run(
         &mut renderer,
         &scene,
-        &options(20, Duration::from_millis(40)),
+        &options(20, Duration::from_secs(60)),
         |_| {},
     )
     .expect("rendering works");
-    // 32 patches re-tessellate in a few ms. Only patches visible in the previous frame are
+    // Only patches visible in the previous frame are
     // queued (the paper's rule), so a patch the jump newly reveals is refined one frame late:
     // within the pixel error by the second frame after the jump.
     assert!(
