@@ -184,6 +184,21 @@ fn memory_stays_flat_over_a_thousand_views() {
         mib(m.rss_growth()),
         mib(m.heap_growth())
     );
+    // Kept for CI's log (`.ci/run` prints the file): what each run measured.
+    let line = format!(
+        "{} claim: VmRSS {:+.1} MiB, heap {:+.3} MiB over the last {ROUND} views; \
+         self-check ({:.0} MiB leaked): VmRSS {:+.1} MiB, heap {:+.1} MiB\n",
+        std::env::var("WGPU_BACKEND").unwrap_or_else(|_| "default".into()),
+        mib(r.rss_growth()),
+        mib(r.heap_growth()),
+        mib(leaked),
+        mib(m.rss_growth()),
+        mib(m.heap_growth())
+    );
+    let log = common::scratch("many-views").join("readings.txt");
+    let mut text = std::fs::read_to_string(&log).unwrap_or_default();
+    text.push_str(&line);
+    std::fs::write(&log, text).unwrap_or_else(|e| panic!("{}: {e}", log.display()));
     assert!(
         m.rss_growth() > MARGIN as i64,
         "a leak of {LEAK} bytes per view went unseen by VmRSS: {m:?}"
