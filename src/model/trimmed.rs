@@ -230,6 +230,7 @@ impl TrimmedFace {
         else {
             return Vec::new();
         };
+        let ((u0, u1), (v0, v1)) = self.guess_range((u0, u1), (v0, v1));
         const N: usize = 24;
         const KEEP: usize = 4;
         let mut best: Vec<(f64, DVec2)> = Vec::with_capacity(KEEP + 1);
@@ -249,6 +250,32 @@ impl TrimmedFace {
             }
         }
         best.into_iter().map(|b| b.1).collect()
+    }
+
+    /// The range the coarse guesses cover: the surface's finite range, except that a direction
+    /// whose range is only nominal (not a B-spline's knots, not a period: the line of a cone,
+    /// a cylinder or a plane, which truck gives as `0..1`) spans `3 · reach / speed` either
+    /// side of the range's middle, `reach` the farthest the face gets from the surface there
+    /// and `speed` |∂S/∂v| there. A cone's face past its apex lies at parameters the nominal
+    /// range never comes near, on the other nappe: from guesses in `0..1` the search ends on
+    /// the near nappe (trj4's wide cones, their loops 12–22 mm off the surface, error 145 ε).
+    /// The factor: on a cone of semi-angle α (v along its axis, speed 1/cos α) a face point is
+    /// at most `reach · min(1, cot α) ≤ √2 · reach / speed` away in v.
+    fn guess_range(&self, u: (f64, f64), v: (f64, f64)) -> ((f64, f64), (f64, f64)) {
+        let (ku, kv) = knot_bounds(&self.surface);
+        let (pu, pv) = self.periods();
+        let mid = DVec2::new(0.5 * (u.0 + u.1), 0.5 * (v.0 + v.1));
+        let (su, sv) = self.surface.derivs(mid);
+        let reach = self.surface.point(mid).distance(self.bounds.center) + self.bounds.radius;
+        let widen = |r: (f64, f64), knots: Interval, period: Option<f64>, speed: f64| {
+            let h = 3.0 * reach / speed;
+            if knots.is_some() || period.is_some() || !(h.is_finite() && h > 0.0) {
+                return r;
+            }
+            let c = 0.5 * (r.0 + r.1);
+            ((c - h).min(r.0), (c + h).max(r.1))
+        };
+        (widen(u, ku, pu, su.length()), widen(v, kv, pv, sv.length()))
     }
 
     /// Levenberg–Marquardt on |S(u, v) − p|² from `uv`, on the wrapped surface (so it runs across
@@ -478,6 +505,44 @@ impl SurfaceEval for TruckSurface {
     fn periods(&self) -> (Option<f64>, Option<f64>) {
         (self.u_period(), self.v_period())
     }
+}
+
+/// The four sides of the parameter rectangle `(u0, u1, v0, v1)` as curves on the surface,
+/// counter-clockwise from `(u0, v0)`, with ids from `id` (`id + k` for side k; sides 1 and 3
+/// share `id + 1` where u closes on itself, sides 0 and 2 share `id` where v does: a seam is
+/// one edge used twice). Bounds an untrimmed IGES surface, and a STEP face whose only bound
+/// is a `VERTEX_LOOP` (a whole sphere).
+pub fn parameter_rectangle(
+    surface: &TruckSurface,
+    (u0, u1, v0, v1): (f64, f64, f64, f64),
+    seams: (bool, bool),
+    id: u64,
+) -> Vec<TrimEdge> {
+    use truck_stepio::r#in::alias::Curve2D;
+    use truck_stepio::r#in::alias::re_exports::{Line, PCurve, ParametricCurve, Point2};
+    let corners = [(u0, v0), (u1, v0), (u1, v1), (u0, v1)];
+    (0..4)
+        .map(|k| {
+            let (a, b) = (corners[k], corners[(k + 1) % 4]);
+            let line = Curve2D::Line(Line(Point2::new(a.0, a.1), Point2::new(b.0, b.1)));
+            let curve = Curve3D::PCurve(PCurve::new(Box::new(line), Box::new(surface.clone())));
+            let side = match k {
+                1 | 3 if seams.0 => 1,
+                0 | 2 if seams.1 => 0,
+                _ => k as u64,
+            };
+            let start = to_dvec(curve.subs(0.0));
+            let end = to_dvec(curve.subs(1.0));
+            TrimEdge {
+                id: id + side,
+                curve,
+                t0: 0.0,
+                t1: 1.0,
+                start,
+                end,
+            }
+        })
+        .collect()
 }
 
 /// A finite parameter interval, `None` when unbounded.

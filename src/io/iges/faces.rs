@@ -15,8 +15,8 @@ use std::collections::{HashMap, HashSet};
 use std::sync::Arc;
 
 use glam::{DMat4, DVec3};
-use truck_stepio::r#in::alias::re_exports::{Line, PCurve, Point2};
-use truck_stepio::r#in::alias::{Curve2D, Curve3D, Surface};
+use truck_stepio::r#in::alias::re_exports::PCurve;
+use truck_stepio::r#in::alias::{Curve3D, Surface};
 
 use super::IgesError;
 use super::directory::{Entry, IgesFile};
@@ -266,7 +266,8 @@ pub fn face(d: &mut Decoder<'_, '_>, e: &Entry) -> Result<TrimmedFace, IgesError
             de: e.de,
             reason: "an unbounded plane without an outer boundary".into(),
         })?;
-        let rect = rectangle(&surface, range, closed);
+        let seams = (closed.0.is_some(), closed.1.is_some());
+        let rect = crate::model::trimmed::parameter_rectangle(&surface, range, seams, RECT_EDGE_ID);
         loops.insert(0, (chain(rect, e.de)?, true));
     }
     let loops: Vec<Vec<LoopEdge>> = loops.into_iter().map(|l| l.0).collect();
@@ -285,46 +286,6 @@ pub fn face(d: &mut Decoder<'_, '_>, e: &Entry) -> Result<TrimmedFace, IgesError
         domain_left: true,
         bounds: Sphere::around(pts.iter().copied()),
     })
-}
-
-/// The four sides of the parameter rectangle as curves on the surface (sides along a closed
-/// direction's seam share an id).
-fn rectangle(
-    surface: &Surface,
-    (u0, u1, v0, v1): (f64, f64, f64, f64),
-    closed: (
-        crate::model::trimmed::Interval,
-        crate::model::trimmed::Interval,
-    ),
-) -> Vec<TrimEdge> {
-    let corners = [(u0, v0), (u1, v0), (u1, v1), (u0, v1)];
-    (0..4)
-        .map(|k| {
-            let (a, b) = (corners[k], corners[(k + 1) % 4]);
-            let line = Curve2D::Line(Line(Point2::new(a.0, a.1), Point2::new(b.0, b.1)));
-            let curve = Curve3D::PCurve(PCurve::new(Box::new(line), Box::new(surface.clone())));
-            // Sides 1 (u = u1) and 3 (u = u0) meet on a closed u seam; 0 and 2 on a v seam.
-            let seam = match k {
-                1 | 3 if closed.0.is_some() => 1,
-                0 | 2 if closed.1.is_some() => 0,
-                _ => k as u64,
-            };
-            let start = crate::model::trimmed::to_dvec(
-                truck_stepio::r#in::alias::re_exports::ParametricCurve::subs(&curve, 0.0),
-            );
-            let end = crate::model::trimmed::to_dvec(
-                truck_stepio::r#in::alias::re_exports::ParametricCurve::subs(&curve, 1.0),
-            );
-            TrimEdge {
-                id: RECT_EDGE_ID + seam,
-                curve,
-                t0: 0.0,
-                t1: 1.0,
-                start,
-                end,
-            }
-        })
-        .collect()
 }
 
 /// The loop of boundary entity `de` (a 142) on `surface`, in the face's coordinates (`m`: the

@@ -483,6 +483,7 @@ fn convert_face(
         surface = plane_from_file(file, id).ok_or("the surface has non-finite parameters")?;
     }
     let mut loops = Vec::new();
+    let mut vertex_bound = false;
     for b in &face.bounds {
         let (_, bound) =
             entity_ref(b, &table.face_bound).ok_or("face bound is not an EDGE_LOOP")?;
@@ -491,6 +492,7 @@ fn convert_face(
             if let PlaceHolder::Ref(Name::Entity(l)) = &bound.bound
                 && vertex_loops.contains(l)
             {
+                vertex_bound = true;
                 continue;
             }
             return Err("face bound is not an EDGE_LOOP (POLY_LOOP is not supported)".into());
@@ -529,6 +531,12 @@ fn convert_face(
             loops.push(out);
         }
     }
+    if loops.is_empty() && vertex_bound {
+        // Only a VERTEX_LOOP (at a pole): the face is the whole closed surface, a sphere.
+        // Bounded as a kernel bounds it: its seam meridian, once each way (ShapeFix adds the
+        // seam and the degenerate pole edges; the poles are points here).
+        loops = whole_surface_loop(&surface, id).into_iter().collect();
+    }
     if loops.is_empty() {
         return Err("the face has no edge loop".into());
     }
@@ -543,6 +551,48 @@ fn convert_face(
         domain_left: face.same_sense,
         bounds: Sphere::around(pts.iter().copied()),
     })
+}
+
+/// Ids of the seam edges made for whole faces (above any STEP entity id a file can hold in
+/// f64-exact integers: `WHOLE_FACE_EDGE + 4 · face + side`).
+const WHOLE_FACE_EDGE: u64 = 1 << 56;
+
+/// The loop bounding the whole of a sphere (face `face`): its parameter rectangle without the
+/// sides that are poles (points), i.e. the seam meridian up and down again. `None` for any
+/// other surface (a face bounded only by vertex loops elsewhere stays refused).
+fn whole_surface_loop(surface: &TruckSurface, face: u64) -> Option<Vec<LoopEdge>> {
+    use crate::model::trimmed::{SurfaceEval, parameter_bounds, parameter_rectangle};
+    use truck_stepio::r#in::alias::ElementarySurface;
+    let TruckSurface::ElementarySurface(e) = surface else {
+        return None;
+    };
+    if !matches!(**e, ElementarySurface::Sphere(_)) {
+        return None;
+    }
+    let (ru, rv) = parameter_bounds(surface);
+    let pu = surface.periods().0;
+    let (u0, u1) = ru.or(pu.map(|p| (0.0, p)))?;
+    let (v0, v1) = rv?;
+    let rect = parameter_rectangle(
+        surface,
+        (u0, u1, v0, v1),
+        (pu.is_some(), false),
+        WHOLE_FACE_EDGE + 4 * face.min(1 << 50),
+    );
+    let size = rect
+        .iter()
+        .map(|e| e.start.distance(e.end))
+        .fold(0.0, f64::max)
+        .max(rect[0].start.distance(rect[1].point(0.5)));
+    let lp: Vec<LoopEdge> = rect
+        .into_iter()
+        .filter(|e| e.point(0.5).distance(e.start) > 1e-9 * size)
+        .map(|e| LoopEdge {
+            edge: Arc::new(e),
+            forward: true,
+        })
+        .collect();
+    (lp.len() == 2).then_some(lp)
 }
 
 fn surface_is_finite(s: &TruckSurface) -> bool {
