@@ -230,15 +230,18 @@ impl TrimmedFace {
         else {
             return Vec::new();
         };
-        let ((u0, u1), (v0, v1)) = self.guess_range((u0, u1), (v0, v1));
+        let (((u0, u1), (v0, v1)), widened) = self.guess_range((u0, u1), (v0, v1));
         const N: usize = 24;
-        const KEEP: usize = 4;
+        const KEEP: usize = 8;
+        // A widened direction gets 4× the steps: on a wide cone near its apex the near nappe's
+        // grid points can all be nearer than the far nappe's (trj4 #4134 at 24 steps).
+        let (nu, nv) = (N * widened.0, N * widened.1);
         let mut best: Vec<(f64, DVec2)> = Vec::with_capacity(KEEP + 1);
-        for i in 0..=N {
-            for j in 0..=N {
+        for i in 0..=nu {
+            for j in 0..=nv {
                 let uv = DVec2::new(
-                    u0 + (u1 - u0) * i as f64 / N as f64,
-                    v0 + (v1 - v0) * j as f64 / N as f64,
+                    u0 + (u1 - u0) * i as f64 / nu as f64,
+                    v0 + (v1 - v0) * j as f64 / nv as f64,
                 );
                 let d = self.surface.point(uv).distance_squared(p);
                 if !d.is_finite() || best.len() == KEEP && d >= best[KEEP - 1].0 {
@@ -261,7 +264,13 @@ impl TrimmedFace {
     /// the near nappe (trj4's wide cones, their loops 12–22 mm off the surface, error 145 ε).
     /// The factor: on a cone of semi-angle α (v along its axis, speed 1/cos α) a face point is
     /// at most `reach · min(1, cot α) ≤ √2 · reach / speed` away in v.
-    fn guess_range(&self, u: (f64, f64), v: (f64, f64)) -> ((f64, f64), (f64, f64)) {
+    /// Also returns the step multiplier per direction (4 where widened, else 1).
+    #[allow(clippy::type_complexity)]
+    fn guess_range(
+        &self,
+        u: (f64, f64),
+        v: (f64, f64),
+    ) -> (((f64, f64), (f64, f64)), (usize, usize)) {
         let (ku, kv) = knot_bounds(&self.surface);
         let (pu, pv) = self.periods();
         let mid = DVec2::new(0.5 * (u.0 + u.1), 0.5 * (v.0 + v.1));
@@ -269,13 +278,14 @@ impl TrimmedFace {
         let reach = self.surface.point(mid).distance(self.bounds.center) + self.bounds.radius;
         let widen = |r: (f64, f64), knots: Interval, period: Option<f64>, speed: f64| {
             let h = 3.0 * reach / speed;
-            if knots.is_some() || period.is_some() || !(h.is_finite() && h > 0.0) {
-                return r;
-            }
             let c = 0.5 * (r.0 + r.1);
-            ((c - h).min(r.0), (c + h).max(r.1))
+            if knots.is_some() || period.is_some() || !(h.is_finite() && c - h < r.0) {
+                return (r, 1);
+            }
+            (((c - h).min(r.0), (c + h).max(r.1)), 4)
         };
-        (widen(u, ku, pu, su.length()), widen(v, kv, pv, sv.length()))
+        let ((u, mu), (v, mv)) = (widen(u, ku, pu, su.length()), widen(v, kv, pv, sv.length()));
+        ((u, v), (mu, mv))
     }
 
     /// Levenberg–Marquardt on |S(u, v) − p|² from `uv`, on the wrapped surface (so it runs across
