@@ -233,8 +233,10 @@ impl TrimmedFace {
         let (((u0, u1), (v0, v1)), widened) = self.guess_range((u0, u1), (v0, v1));
         const N: usize = 24;
         const KEEP: usize = 8;
-        // A widened direction gets 4× the steps: on a wide cone near its apex the near nappe's
-        // grid points can all be nearer than the far nappe's (trj4 #4134 at 24 steps).
+        // A widened direction across a periodic one (a cone's or cylinder's axis) gets 4× the
+        // steps: on a wide cone near its apex the near nappe's grid points can all be nearer
+        // than the far nappe's (trj4 #4134 at 24 steps). A plane (nothing periodic, convex
+        // distance) keeps 24 × 24: this search runs at each loop's start in every tessellation.
         let (nu, nv) = (N * widened.0, N * widened.1);
         let mut best: Vec<(f64, DVec2)> = Vec::with_capacity(KEEP + 1);
         for i in 0..=nu {
@@ -264,7 +266,8 @@ impl TrimmedFace {
     /// the near nappe (trj4's wide cones, their loops 12–22 mm off the surface, error 145 ε).
     /// The factor: on a cone of semi-angle α (v along its axis, speed 1/cos α) a face point is
     /// at most `reach · min(1, cot α) ≤ √2 · reach / speed` away in v.
-    /// Also returns the step multiplier per direction (4 where widened, else 1).
+    /// Also returns the step multiplier per direction (4 where widened across a periodic
+    /// direction, else 1).
     #[allow(clippy::type_complexity)]
     fn guess_range(
         &self,
@@ -276,15 +279,19 @@ impl TrimmedFace {
         let mid = DVec2::new(0.5 * (u.0 + u.1), 0.5 * (v.0 + v.1));
         let (su, sv) = self.surface.derivs(mid);
         let reach = self.surface.point(mid).distance(self.bounds.center) + self.bounds.radius;
-        let widen = |r: (f64, f64), knots: Interval, period: Option<f64>, speed: f64| {
+        let widen = |r: (f64, f64), knots: Interval, period: Option<f64>, speed: f64, across| {
             let h = 3.0 * reach / speed;
             let c = 0.5 * (r.0 + r.1);
             if knots.is_some() || period.is_some() || !(h.is_finite() && c - h < r.0) {
                 return (r, 1);
             }
-            (((c - h).min(r.0), (c + h).max(r.1)), 4)
+            let steps = if across { 4 } else { 1 };
+            (((c - h).min(r.0), (c + h).max(r.1)), steps)
         };
-        let ((u, mu), (v, mv)) = (widen(u, ku, pu, su.length()), widen(v, kv, pv, sv.length()));
+        let ((u, mu), (v, mv)) = (
+            widen(u, ku, pu, su.length(), pv.is_some()),
+            widen(v, kv, pv, sv.length(), pu.is_some()),
+        );
         ((u, v), (mu, mv))
     }
 

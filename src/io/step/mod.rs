@@ -581,9 +581,8 @@ fn whole_surface_loop(surface: &TruckSurface, face: u64) -> Option<Vec<LoopEdge>
     );
     let size = rect
         .iter()
-        .map(|e| e.start.distance(e.end))
-        .fold(0.0, f64::max)
-        .max(rect[0].start.distance(rect[1].point(0.5)));
+        .map(|e| e.start.distance(e.point(0.5)))
+        .fold(0.0, f64::max);
     let lp: Vec<LoopEdge> = rect
         .into_iter()
         .filter(|e| e.point(0.5).distance(e.start) > 1e-9 * size)
