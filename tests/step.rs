@@ -848,3 +848,51 @@ fn a_sphere_bounded_by_a_vertex_loop_is_drawn_whole() {
         );
     }
 }
+
+/// `OFFSET_SURFACE`s of elementary bases (OCCT solids whose cylinder, sphere and cone were
+/// rewritten as offsets of a cylinder r 10 by +2, a sphere r 12 by −3 and a cone by +1.5,
+/// the same geometry): every face drawn, judged by the offset surfaces' own equations.
+/// Before `io::step::offset` the three faces were skipped ("Lookup failed").
+#[test]
+fn offsets_of_elementary_surfaces_are_the_surfaces_they_describe() {
+    let path = common::root().join("tests/data/step/offset_elementary.step");
+    let scene = load(&path).expect("loads");
+    assert!(scene.skipped.is_empty(), "{:?}", scene.skipped);
+    let tol = 0.01;
+    let meshes = tessellate_scene_tolerance(&scene, tol);
+    let mut judged = Vec::new();
+    for (p, m) in scene.patches.iter().zip(&meshes) {
+        let PatchSurface::Trimmed(face) = &p.surface else {
+            continue;
+        };
+        let kind = patchwork::check::fidelity::surface_kind(&face.surface);
+        // distance from the surface each face must lie on (cone: ρ = 10 − 0.4 z, z in 0..15)
+        let off: Box<dyn Fn(glam::DVec3) -> f64> = match kind {
+            "cylinder" => Box::new(|q: glam::DVec3| (q.truncate().length() - 12.0).abs()),
+            "sphere" => {
+                Box::new(|q: glam::DVec3| (q - glam::DVec3::new(40.0, 0.0, 0.0)).length() - 9.0)
+            }
+            "cone" => Box::new(|q: glam::DVec3| {
+                let rho = (q - glam::DVec3::new(-40.0, 0.0, q.z)).length();
+                (rho - (10.0 - 0.4 * q.z)).abs() / (1.0f64 + 0.16).sqrt()
+            }),
+            _ => continue,
+        };
+        assert!(m.failure.is_none(), "{:?}", m.failure);
+        let mut worst = 0.0f64;
+        for tri in &m.triangles {
+            let [a, b, c] = tri.map(|i| m.positions[i as usize].as_dvec3());
+            for q in [a, b, c, (a + b + c) / 3.0] {
+                worst = worst.max(off(q).abs());
+            }
+        }
+        assert!(
+            worst <= tol + 1e-5,
+            "face #{} ({kind}): {worst} mm off its surface",
+            face.id
+        );
+        judged.push(kind);
+    }
+    judged.sort_unstable();
+    assert_eq!(judged, ["cone", "cylinder", "sphere"]);
+}

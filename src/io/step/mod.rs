@@ -15,6 +15,7 @@
 
 mod bspline_check;
 mod chunks;
+pub mod offset;
 pub mod p21;
 mod ref_check;
 pub mod structure;
@@ -152,6 +153,7 @@ pub fn read_with(
 
     complete_placements(&mut table);
     untrim_swept_curves(&mut table, &file);
+    let (offsets, offsets_refused) = offset::resolve(&mut table, &file, structure.plane_angle_rad);
 
     let mut warnings = structure.warnings.clone();
     if !structure.unsupported.is_empty() {
@@ -182,6 +184,18 @@ pub fn read_with(
             "{} entities not read, their faces not drawn (#{id}: {reason}{})",
             tangled.len(),
             if tangled.len() > 1 { "; …" } else { "" }
+        ));
+    }
+    if let Some((id, reason)) = offsets_refused.iter().next() {
+        warnings.push(format!(
+            "{} of {} OFFSET_SURFACE entities not read, their faces not drawn (#{id}: {reason}{})",
+            offsets_refused.len(),
+            offsets_refused.len() + offsets.len(),
+            if offsets_refused.len() > 1 {
+                "; …"
+            } else {
+                ""
+            }
         ));
     }
     refused.extend(tangled);
@@ -221,6 +235,7 @@ pub fn read_with(
         vertex_loops: &vertex_loops,
         angle_rad: structure.plane_angle_rad,
         uncertainty: structure.uncertainty,
+        offsets_refused: &offsets_refused,
     };
     let edges = EdgeCache::default();
     let results: Vec<(Result<TrimmedFace, String>, Vec<u64>)> = {
@@ -435,6 +450,8 @@ struct FaceSource<'a> {
     angle_rad: Option<f64>,
     /// The file's distance uncertainty (file units).
     uncertainty: Option<f64>,
+    /// `OFFSET_SURFACE`s not replaced ([`offset::resolve`]), and why.
+    offsets_refused: &'a BTreeMap<u64, String>,
 }
 
 /// Converts face `id`; `reached` gets every edge curve the face looks up, in order.
@@ -450,6 +467,7 @@ fn convert_face(
         vertex_loops,
         angle_rad,
         uncertainty,
+        offsets_refused,
     } = *src;
     let face: FaceSurfaceHolder = if let Some(f) = table.face_surface.get(&id) {
         f.clone()
@@ -462,11 +480,16 @@ fn convert_face(
             "not a face truck-stepio could read (ADVANCED_FACE / FACE_SURFACE expected)".into(),
         );
     };
-    let surface_any = face
-        .face_geometry
-        .clone()
-        .into_owned(table)
-        .map_err(|e| format!("surface: {e}"))?;
+    let surface_any =
+        face.face_geometry.clone().into_owned(table).map_err(|e| {
+            match holder_ref(&face.face_geometry).and_then(|g| offsets_refused.get(&g)) {
+                Some(why) => format!(
+                    "surface: OFFSET_SURFACE #{}: {why}",
+                    holder_ref(&face.face_geometry).unwrap_or(0)
+                ),
+                None => format!("surface: {e}"),
+            }
+        })?;
     let mut surface =
         TruckSurface::try_from(&surface_any).map_err(|e| format!("surface not supported: {e}"))?;
     if let Some(rad) = angle_rad
@@ -667,10 +690,28 @@ fn convert_edge(
     holder: &EdgeCurveHolder,
     uncertainty: Option<f64>,
 ) -> Result<(TrimEdge, bool), String> {
-    let ec = holder
-        .clone()
-        .into_owned(table)
-        .map_err(|e| format!("edge #{id}: {e}"))?;
+    // truck-stepio follows a SURFACE_CURVE's preferred representation, which may be a
+    // parameter-space curve (its parameters need not match truck's surface, and it only
+    // approximates the edge); the 3D curve of a SURFACE_CURVE / SEAM_CURVE is exact: use it.
+    let curve_3d = holder_ref(&holder.edge_geometry)
+        .and_then(|g| file.get(g))
+        .and_then(p21::Entity::record)
+        .filter(|r| r.name == "SURFACE_CURVE" || r.name == "SEAM_CURVE")
+        .and_then(|r| r.ref_at(1));
+    let ec = match holder.clone().into_owned(table) {
+        Ok(ec) => ec,
+        // A SURFACE_CURVE with a pcurve truck cannot read (on a surface it lacks): the edge is
+        // its 3D curve.
+        Err(e) => match curve_3d {
+            Some(c3d) => {
+                let mut h = holder.clone();
+                h.edge_geometry = PlaceHolder::Ref(Name::Entity(c3d));
+                h.into_owned(table)
+                    .map_err(|_| format!("edge #{id}: {e}"))?
+            }
+            None => return Err(format!("edge #{id}: {e}")),
+        },
+    };
     let start = to_dvec(Point3::from(&ec.edge_start.vertex_geometry));
     let end = to_dvec(Point3::from(&ec.edge_end.vertex_geometry));
     // Closed when it starts and ends at one VERTEX_POINT (as a kernel decides), or at one
@@ -685,14 +726,6 @@ fn convert_edge(
     // file's own uncertainty, generously, or a small fraction of the edge.
     let loose_tol = (LOOSE_UNCERTAINTY_FACTOR * uncertainty.unwrap_or(0.0))
         .max(LOOSE_EDGE_FRACTION * start.distance(end).max(tol));
-    // truck-stepio follows a SURFACE_CURVE's preferred representation, which may be a
-    // parameter-space curve (its parameters need not match truck's surface, and it only
-    // approximates the edge); the 3D curve of a SURFACE_CURVE / SEAM_CURVE is exact: use it.
-    let curve_3d = holder_ref(&holder.edge_geometry)
-        .and_then(|g| file.get(g))
-        .and_then(p21::Entity::record)
-        .filter(|r| r.name == "SURFACE_CURVE" || r.name == "SEAM_CURVE")
-        .and_then(|r| r.ref_at(1));
     let exact = curve_3d.and_then(|c3d| {
         let geometry = PlaceHolder::<CurveAnyHolder>::Ref(Name::Entity(c3d))
             .into_owned(table)

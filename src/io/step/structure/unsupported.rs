@@ -1,6 +1,6 @@
 //! Geometry a STEP file holds that the geometry reader does not use, counted by entity type
 //! so the loader can say what it did not draw: faceted and tessellated B-reps, constructive
-//! solids, offset geometry, wireframes and point/curve sets, and two types only in the role
+//! solids, offset curves, wireframes and point/curve sets, and two types only in the role
 //! where the reader meets them.
 
 use std::collections::{HashMap, HashSet};
@@ -9,7 +9,7 @@ use crate::io::step::p21::P21File;
 
 /// Entity types, anywhere in the file, that describe geometry to draw but that the STEP
 /// geometry reader does not read: faceted and tessellated B-reps, bounded-surface forms other
-/// than faces, offset geometry, wireframes and point/curve sets, constructive solids.
+/// than faces, offset curves (offset surfaces are read: `super::super::offset`), wireframes and point/curve sets, constructive solids.
 pub const UNSUPPORTED_TYPES: &[&str] = &[
     "BLOCK",
     "BOOLEAN_RESULT",
@@ -25,7 +25,6 @@ pub const UNSUPPORTED_TYPES: &[&str] = &[
     "GEOMETRIC_SET",
     "HALF_SPACE_SOLID",
     "OFFSET_CURVE_3D",
-    "OFFSET_SURFACE",
     "POLY_LOOP",
     "RECTANGULAR_COMPOSITE_SURFACE",
     "RECTANGULAR_TRIMMED_SURFACE",
@@ -111,12 +110,12 @@ mod tests {
              #4=EDGE_CURVE('',#9,#9,#5,.T.);#5=SURFACE_CURVE('',#6,(),.CURVE_3D.);\
              #6=TRIMMED_CURVE('',#9,(),(),.T.,.UNSPECIFIED.);\
              #7=FACE_BOUND('',#8,.T.);#8=VERTEX_LOOP('',#9);#9=VERTEX_POINT('',$);\
-             #10=TESSELLATED_SHELL('',(),$);#11=(BOUNDED_SURFACE() OFFSET_SURFACE('',#9,1.,.F.));",
+             #10=TESSELLATED_SHELL('',(),$);#11=(BOUNDED_CURVE() OFFSET_CURVE_3D('',#9,1.,.F.,#9));",
         );
         assert_eq!(
             s.unsupported,
             [
-                ("OFFSET_SURFACE".to_owned(), 1),
+                ("OFFSET_CURVE_3D".to_owned(), 1),
                 ("TESSELLATED_SHELL".to_owned(), 1),
                 ("TRIMMED_CURVE".to_owned(), 2),
                 ("VERTEX_LOOP".to_owned(), 1),
