@@ -1,8 +1,10 @@
 #!/usr/bin/env python3
 """Independent fidelity judge: patchwork's export against Open CASCADE.
 
-For every STEP or IGES file of the corpus (default: models/*.{stp,step,igs,iges} and
-models/corpus/*.{stp,step,igs,iges}[.gz]) and every relative tolerance `rel`:
+For every STEP or IGES file of the corpus (default: models/*.{stp,step,igs,iges},
+models/corpus/*.{stp,step,igs,iges}[.gz] and models/generated/*.step, the generator's failures
+kept reduced) and every relative tolerance `rel`, or for N models of the seeded generator
+(tools/cad_generator.py; `--generate N --gen-seed S [--gen-start K] [--reduce-to DIR]`):
 
   T = rel x diagonal of OCCT's world bounding box (millimetres).
 
@@ -951,7 +953,7 @@ def load_known(path):
 
 def default_files():
     fs = []
-    for pat in ("models/*.stp", "models/*.step", "models/corpus/*.stp", "models/corpus/*.step",
+    for pat in ("models/*.stp", "models/*.step", "models/generated/*.step", "models/corpus/*.stp", "models/corpus/*.step",
                 "models/corpus/*.stp.gz", "models/corpus/*.step.gz", "models/*.igs", "models/*.iges",
                 "models/corpus/*.igs", "models/corpus/*.iges", "models/corpus/*.igs.gz",
                 "models/corpus/*.iges.gz"):
@@ -1044,6 +1046,89 @@ def self_test(args):
     return 0 if ok else 1
 
 
+# ----------------------------------------------------------------------------- generated models
+
+
+def judge_generated(args):
+    """Build models of the seeded generator and judge each like a file; a failing model is
+    reduced (cad_generator.reduce_recipe) when --reduce-to is given. Exit 1 on any failure."""
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    import cad_generator as gen
+
+    rels = [float(x) for x in args.rel.split(",")]
+    known = load_known(args.known_failures)
+    work = tempfile.mkdtemp(prefix="occt_generated_")
+    t0 = time.time()
+    rows, failed, knownfail, notbuilt, seen = [], [], [], [], {}
+
+    def judge(rec, name):
+        step = os.path.join(work, name + ".step")
+        info = gen.build_step(rec, step)
+        return info, run_file(step, rels, args.patchwork, args.max_samples, work, args.seed)
+
+    try:
+        for i in range(args.gen_start, args.gen_start + args.generate):
+            rec = gen.recipe(args.gen_seed, i)
+            name = "gen-%d-%d" % (args.gen_seed, i)
+            t1 = time.time()
+            try:
+                info, res = judge(rec, name)
+            except gen.Dropped as e:
+                notbuilt.append(name)
+                log("... %s: not built (%s)" % (name, e))
+                continue
+            fs = gen.features(rec, info)
+            for f in fs:
+                seen[f] = seen.get(f, 0) + 1
+            bad = [r for r in res if r["fail"]]
+            listed = name + ".step" in known
+            for r in res:
+                r["file"] = name + ".step"
+                r["features"] = fs
+                r["status"] = ("KNOWN" if listed else "FAIL") if r["fail"] else ("FIXED (remove from list)" if listed else "pass")
+                rows.append(r)
+            log("... %s (%d placed faces; %s): %s (%.1f s)" % (name, info["faces"], " ".join(fs),
+                                                             "; ".join(bad[0]["fail"]) if bad else "pass", time.time() - t1))
+            if bad and listed:
+                knownfail.append(name)
+            elif bad:
+                failed.append(name)
+                if args.reduce_to:
+                    def fails(r2):
+                        try:
+                            _, rr = judge(r2, name + "-try")
+                        except gen.Dropped:
+                            return False
+                        return any(x["fail"] for x in rr)
+
+                    small = gen.reduce_recipe(rec, fails, log=log)
+                    os.makedirs(args.reduce_to, exist_ok=True)
+                    out = os.path.join(args.reduce_to, name + ".step")
+                    info2 = gen.build_step(small, out)
+                    with open(out[:-5] + ".json", "w") as fh:
+                        json.dump(dict(small, built={k: v for k, v in info2.items() if k != "kept"},
+                                       failure=bad[0]["fail"]), fh, indent=1)
+                    log("    reduced to %d parts, %d placed, %d faces: kept as %s" % (
+                        info2["parts"], info2["leaves"], info2["faces"], os.path.relpath(out, REPO)))
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+    total = time.time() - t0
+    log("")
+    print_table(rows)
+    log("")
+    log("features judged: %s" % ", ".join("%s %d" % (f, seen.get(f, 0)) for f in gen.FEATURES))
+    n = args.generate - len(notbuilt)
+    log("occt_fidelity --generate: %d models of seed %d from %d (%d built, %d not built) x %d tolerances in %.1f s: "
+        "%d failed%s, %d known failures%s" % (
+            args.generate, args.gen_seed, args.gen_start, n, len(notbuilt), len(rels), total, len(failed),
+            (" (" + " ".join(failed) + ")") if failed else "", len(knownfail),
+            (" (" + " ".join(knownfail) + ")") if knownfail else ""))
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump({"total_s": total, "rows": rows, "not_built": notbuilt}, fh, indent=1, default=float)
+    return 1 if failed else 0
+
+
 # ----------------------------------------------------------------------------- main
 
 
@@ -1057,9 +1142,18 @@ def main():
     ap.add_argument("--max-samples", type=int, default=60000, help="cap on samples per direction and file")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--self-test", action="store_true", help="check that the judge catches mutated exports")
+    ap.add_argument("--generate", type=int, metavar="N",
+                    help="judge N models of tools/cad_generator.py (sequence --gen-seed, from --gen-start) instead of files")
+    ap.add_argument("--gen-seed", type=int, default=1, help="the generator's sequence (default 1)")
+    ap.add_argument("--gen-start", type=int, default=0, help="first model index of the sequence")
+    ap.add_argument("--reduce-to", metavar="DIR",
+                    help="with --generate: reduce each failing model to the smallest recipe that still fails and keep "
+                         "it in DIR as gen-SEED-INDEX.step with its recipe (.json)")
     args = ap.parse_args()
     if args.self_test:
         return self_test(args)
+    if args.generate:
+        return judge_generated(args)
     rels = [float(x) for x in args.rel.split(",")]
     files = args.files or default_files()
     known = load_known(args.known_failures)
