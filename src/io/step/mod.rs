@@ -480,16 +480,13 @@ fn convert_face(
             "not a face truck-stepio could read (ADVANCED_FACE / FACE_SURFACE expected)".into(),
         );
     };
-    let surface_any =
-        face.face_geometry.clone().into_owned(table).map_err(|e| {
-            match holder_ref(&face.face_geometry).and_then(|g| offsets_refused.get(&g)) {
-                Some(why) => format!(
-                    "surface: OFFSET_SURFACE #{}: {why}",
-                    holder_ref(&face.face_geometry).unwrap_or(0)
-                ),
-                None => format!("surface: {e}"),
-            }
-        })?;
+    let geometry = holder_ref(&face.face_geometry);
+    let surface_any = face.face_geometry.clone().into_owned(table).map_err(|e| {
+        match geometry.and_then(|g| Some((g, offsets_refused.get(&g)?))) {
+            Some((g, why)) => format!("surface: OFFSET_SURFACE #{g}: {why}"),
+            None => format!("surface: {e}"),
+        }
+    })?;
     let mut surface =
         TruckSurface::try_from(&surface_any).map_err(|e| format!("surface not supported: {e}"))?;
     if let Some(rad) = angle_rad

@@ -31,23 +31,14 @@ use crate::isolate::isolated;
 /// Deepest chain of offsets of offsets followed.
 const MAX_CHAIN: usize = 8;
 
-/// One offset surface replaced.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Offset {
-    /// The `OFFSET_SURFACE` entity.
-    pub id: u64,
-    /// Largest distance found between the replacement and the true offset (0 when exact).
-    pub error: f64,
-}
-
 /// Replaces every `OFFSET_SURFACE` of `file` in `table` (see the module doc). `rad` is the
-/// file's radians per plane-angle unit. Returns the surfaces replaced and, by entity id, why
-/// the others were not.
+/// file's radians per plane-angle unit. Returns the ids of the surfaces replaced and, by
+/// entity id, why the others were not.
 pub fn resolve(
     table: &mut Table,
     file: &P21File,
     rad: Option<f64>,
-) -> (Vec<Offset>, BTreeMap<u64, String>) {
+) -> (Vec<u64>, BTreeMap<u64, String>) {
     let mut next = file.entities.iter().map(|e| e.id).max().unwrap_or(0) + 1;
     let mut done = Vec::new();
     let mut refused = BTreeMap::new();
@@ -57,7 +48,7 @@ pub fn resolve(
         }
         let mut text = String::new();
         let result =
-            replacement(file, e.id, rad.unwrap_or(1.0), &mut next, &mut text).and_then(|error| {
+            replacement(file, e.id, rad.unwrap_or(1.0), &mut next, &mut text).and_then(|()| {
                 let instances = super::chunks::entity_instances(&text)
                     .map_err(|err| format!("its replacement did not parse: {err}"))?;
                 table.dummy.remove(&e.id);
@@ -66,10 +57,10 @@ pub fn resolve(
                         return Err("truck-stepio did not accept its replacement".into());
                     }
                 }
-                Ok(error)
+                Ok(())
             });
         match result {
-            Ok(error) => done.push(Offset { id: e.id, error }),
+            Ok(()) => done.push(e.id),
             Err(why) => {
                 refused.insert(e.id, why);
             }
@@ -79,14 +70,14 @@ pub fn resolve(
 }
 
 /// Writes the statements replacing offset surface `id` into `out` (new entities numbered from
-/// `next`); returns the replacement's error.
+/// `next`).
 fn replacement(
     file: &P21File,
     id: u64,
     rad: f64,
     next: &mut u64,
     out: &mut String,
-) -> Result<f64, String> {
+) -> Result<(), String> {
     // Follow offsets of offsets down to the basis, adding distances.
     let mut basis = id;
     let mut d = 0.0;
@@ -126,7 +117,7 @@ fn replacement(
         let moved = shifted(m, m.z_axis.truncate() * d);
         let pos = write_placement(moved, next, out);
         writeln!(out, "#{id}=PLANE('',#{pos});").ok();
-        return Ok(0.0);
+        return Ok(());
     }
     for (name, radius_arg) in [
         ("CYLINDRICAL_SURFACE", 2),
@@ -150,7 +141,7 @@ fn replacement(
             } else {
                 writeln!(out, "#{id}={name}('',#{pos},{});", real(radius)).ok();
             }
-            return Ok(0.0);
+            return Ok(());
         }
     }
     if let Some(r) = entity.part("CONICAL_SURFACE") {
@@ -171,7 +162,7 @@ fn replacement(
             real(alpha)
         )
         .ok();
-        return Ok(0.0);
+        return Ok(());
     }
     // B-spline, NURBS and swept bases: the offset is no surface truck has (a fit within
     // tolerance is future work: see the module doc).
