@@ -5,6 +5,7 @@
 
 pub mod bezier;
 pub mod creases;
+pub mod knots;
 pub mod memory;
 pub mod merge;
 pub mod mesh;

@@ -37,6 +37,10 @@ pub struct TrimEdge {
     /// The edge's vertices (exact end points of its polyline).
     pub start: DVec3,
     pub end: DVec3,
+    /// `(a, length)` when the edge runs across the end of a closed, non-periodic curve's range
+    /// `[a, a + length]` (a B-spline circle whose seam lies inside the edge): `t1` is then
+    /// past the range and [`TrimEdge::point`] wraps the parameter back into it.
+    pub wrap: Option<(f64, f64)>,
 }
 
 impl TrimEdge {
@@ -52,6 +56,8 @@ impl TrimEdge {
         closed: bool,
         tol: f64,
     ) -> Option<TrimEdge> {
+        // truck evaluates an unclamped B-spline wrongly at the end of its range.
+        let curve = super::knots::clamp_curve(&curve).unwrap_or(curve);
         let range = curve_range(&curve).filter(|(a, b)| a.is_finite() && b.is_finite());
         // Where both ends of the range are one point (a whole circle), an open edge is
         // located, never taken for the whole range (a tiny arc at the seam is not a whole
@@ -59,6 +65,7 @@ impl TrimEdge {
         let ends = range
             .map(|(a, b)| (a, b, to_dvec(curve.subs(a)), to_dvec(curve.subs(b))))
             .filter(|&(_, _, pa, pb)| closed || pa.distance(pb) > tol);
+        let mut wrap = None;
         let (t0, t1) = match ends {
             Some((a, b, pa, pb)) if pa.distance(start) <= tol && pb.distance(end) <= tol => (a, b),
             Some((a, b, pa, pb)) if pb.distance(start) <= tol && pa.distance(end) <= tol => (b, a),
@@ -67,11 +74,33 @@ impl TrimEdge {
                 // vertices on it.
                 let s = locate(&curve, start, range, tol)?;
                 let e = locate(&curve, end, range, tol)?;
-                match curve.period() {
+                // A closed curve that truck does not know as periodic (a B-spline circle): the
+                // curve runs from the edge's start to its end (truck inverts it for an edge
+                // against its sense), so an edge whose end comes before its start crosses the
+                // range's end and continues from its beginning (a cut spring's short arc over
+                // the seam was drawn as the long way round).
+                let seam = range.filter(|&(a, b)| {
+                    !closed
+                        && curve.period().is_none()
+                        && b > a
+                        && to_dvec(curve.subs(a)).distance(to_dvec(curve.subs(b))) <= tol
+                });
+                match (curve.period(), seam) {
                     // A closed edge on a periodic curve runs once around; an open one whose
                     // vertices are located at one parameter (a tiny edge, its vertices closer
                     // than the search resolves) is that short chord, not a whole period.
-                    Some(p) if closed && (s - e).abs() < 1e-12 => (s, s + p),
+                    (Some(p), _) if closed && (s - e).abs() < 1e-12 => (s, s + p),
+                    (None, Some((a, b))) if e < s => {
+                        // The end vertex at the range's start is the range's end.
+                        let l = b - a;
+                        let e = if (e - a).abs() <= 1e-12 * l.max(1.0) {
+                            b
+                        } else {
+                            e + l
+                        };
+                        wrap = (e > b).then_some((a, l));
+                        (s, e)
+                    }
                     _ => (s, e),
                 }
             }
@@ -87,11 +116,16 @@ impl TrimEdge {
             t1,
             start,
             end,
+            wrap,
         })
     }
 
     /// Point at curve parameter `t`.
     pub fn point(&self, t: f64) -> DVec3 {
+        let t = match self.wrap {
+            Some((a, l)) if t > a + l => a + (t - a).rem_euclid(l),
+            _ => t,
+        };
         to_dvec(self.curve.subs(t))
     }
 
@@ -557,6 +591,7 @@ pub fn parameter_rectangle(
                 t1: 1.0,
                 start,
                 end,
+                wrap: None,
             }
         })
         .collect()

@@ -356,6 +356,7 @@ fn edge(id: usize, curve: Curve3D, t0: f64, t1: f64) -> TrimEdge {
         t1,
         start,
         end,
+        wrap: None,
     }
 }
 

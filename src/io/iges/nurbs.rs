@@ -170,12 +170,13 @@ impl NurbsPatch {
         self
     }
 
+    /// As a truck surface, its knot vectors clamped (`model::knots`).
     pub fn surface(&self) -> Result<Surface, String> {
         let knots = (
             KnotVec::from(self.knots.0.clone()),
             KnotVec::from(self.knots.1.clone()),
         );
-        Ok(match &self.weights {
+        let s = match &self.weights {
             None => Surface::BSplineSurface(Box::new(
                 BSplineSurface::try_new(
                     knots,
@@ -202,7 +203,8 @@ impl NurbsPatch {
                 )
                 .map_err(|e| e.to_string())?,
             ))),
-        })
+        };
+        Ok(crate::model::knots::clamp_surface(&s).unwrap_or(s))
     }
 }
 

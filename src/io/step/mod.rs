@@ -489,6 +489,10 @@ fn convert_face(
     })?;
     let mut surface =
         TruckSurface::try_from(&surface_any).map_err(|e| format!("surface not supported: {e}"))?;
+    // truck evaluates an unclamped B-spline wrongly at the end of its range.
+    if let Some(clamped) = crate::model::knots::clamp_surface(&surface) {
+        surface = clamped;
+    }
     if let Some(rad) = angle_rad
         && (rad - 1.0).abs() > 1e-12
         && let Some(cone) = cone_from_file(file, id, rad)
