@@ -466,6 +466,25 @@ class Occt:
         d = BRepExtrema_DistShapeShape(BRepBuilderAPI_MakeVertex(gp_Pnt(*q.tolist())).Vertex(), shape)
         return d.Value() if d.IsDone() else float("nan")
 
+    def exact_world_box(self, ins):
+        """Tight box (BRepBndLib.AddOptimal, no triangulation, no tolerances) of an instance's
+        faces placed in the world: what check c falls back on where OCCT's own mesh strays
+        off its B-rep (a rational sweep's BRepMesh left points 0.74 mm off it)."""
+        from OCP.Bnd import Bnd_Box
+        from OCP.BRepBndLib import BRepBndLib
+        from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
+        from OCP.gp import gp_Trsf
+
+        M = ins["M"]
+        tr = gp_Trsf()
+        tr.SetValues(*[float(M[i, j]) for i in range(3) for j in range(4)])
+        moved = BRepBuilderAPI_Transform(self._boundary(ins["proto"], ins["sub"]), tr, True).Shape()
+        b = Bnd_Box()
+        BRepBndLib.AddOptimal_s(moved, b, False, False)
+        if b.IsVoid():
+            return np.full(6, np.nan)
+        return np.array(b.CornerMin().Coord() + b.CornerMax().Coord())
+
     def _boundary(self, proto, sub):
         """The faces of a leaf shape as one compound: the distance to a *solid* is 0 for any
         point inside it (BRepExtrema's inner solution), which would take a chord through the
@@ -764,6 +783,18 @@ def evaluate(occt, ours, rel, T, diag, occt_fine, rng, max_samples, per_tri):
     res = {"rel": rel, "T": T, "inst_ours": len(ours), "inst_occt": len(occt_fine), "fail": []}
     tolbox = max(BOUND * T, 1e-3 * diag)  # both meshes are within 1.1 T of each other
     pairs, worst_box, bad = match_instances(ours, occt_fine, tolbox)
+    if bad:  # OCCT's mesh box may be the one that is off: judge ours by OCCT's exact box too
+        kept = []
+        for i, j, x in bad:
+            try:
+                x2 = float(np.abs(bbox_of(ours[i]) - occt.exact_world_box(occt_fine[j])).max())
+            except Exception:  # noqa: BLE001 (a placement OCCT cannot take: keep the mesh's verdict)
+                x2 = np.inf
+            if x2 > tolbox:
+                kept.append((i, j, min(x, x2)))
+        res["bbox_exact_excused"] = len(bad) - len(kept)
+        bad = kept
+        worst_box = max([x for _, _, x in pairs if x <= tolbox] + [x for _, _, x in bad], default=worst_box)
     res["bbox_worst_over_T"] = worst_box / T if np.isfinite(worst_box) else None
     res["bbox_mismatch"] = len(bad) + abs(len(ours) - len(occt_fine))
     if len(ours) != len(occt_fine):
