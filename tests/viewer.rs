@@ -27,9 +27,12 @@ impl Display {
                 server: None,
             };
         }
-        // Xvfb picks a free display number and writes it to fd 1.
+        // Xvfb picks a free display number and writes it to fd 1. `-noreset`: by default the
+        // server resets when its last client disconnects, and a connection made during the
+        // reset is refused (seen once under load: "Failed to open connection to X server").
         let mut server = Command::new("Xvfb")
             .args([
+                "-noreset",
                 "-displayfd",
                 "1",
                 "-screen",
