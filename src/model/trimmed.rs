@@ -62,9 +62,8 @@ impl TrimEdge {
         // Where both ends of the range are one point (a whole circle), an open edge is
         // located, never taken for the whole range (a tiny arc at the seam is not a whole
         // circle); a trimmed range's ends are the edge's as before.
-        let ends = range
-            .map(|(a, b)| (a, b, to_dvec(curve.subs(a)), to_dvec(curve.subs(b))))
-            .filter(|&(_, _, pa, pb)| closed || pa.distance(pb) > tol);
+        let range_ends = range.map(|(a, b)| (a, b, to_dvec(curve.subs(a)), to_dvec(curve.subs(b))));
+        let ends = range_ends.filter(|&(_, _, pa, pb)| closed || pa.distance(pb) > tol);
         let mut wrap = None;
         let (t0, t1) = match ends {
             Some((a, b, pa, pb)) if pa.distance(start) <= tol && pb.distance(end) <= tol => (a, b),
@@ -79,12 +78,9 @@ impl TrimEdge {
                 // against its sense), so an edge whose end comes before its start crosses the
                 // range's end and continues from its beginning (a cut spring's short arc over
                 // the seam was drawn as the long way round).
-                let seam = range.filter(|&(a, b)| {
-                    !closed
-                        && curve.period().is_none()
-                        && b > a
-                        && to_dvec(curve.subs(a)).distance(to_dvec(curve.subs(b))) <= tol
-                });
+                let seam = range_ends
+                    .filter(|&(a, b, pa, pb)| !closed && b > a && pa.distance(pb) <= tol)
+                    .map(|(a, b, _, _)| (a, b));
                 match (curve.period(), seam) {
                     // A closed edge on a periodic curve runs once around; an open one whose
                     // vertices are located at one parameter (a tiny edge, its vertices closer
