@@ -384,9 +384,15 @@ class Dropped(Exception):
 
 
 def _occt_errors():
-    from OCP.Standard import Standard_Failure
+    # OCP binds every Standard_* exception straight to Python's Exception (not to
+    # Standard_Failure as in C++), so each is named: an op that raises Standard_NoSuchObject
+    # (MakeThickSolidByJoin: "no parameter on edge", seed 1 model 81) is dropped like any other.
+    import OCP.Standard as std
 
-    return (Standard_Failure, RuntimeError)
+    found = tuple(getattr(std, n) for n in dir(std)
+                  if n.startswith("Standard_") and isinstance(getattr(std, n), type)
+                  and issubclass(getattr(std, n), BaseException))
+    return found + (RuntimeError,)
 
 
 OCCT_ERRORS = ()  # set in build_step (OCP is imported on first use)

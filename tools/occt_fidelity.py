@@ -2,7 +2,7 @@
 """Independent fidelity judge: patchwork's export against Open CASCADE.
 
 For every STEP or IGES file of the corpus (default: models/*.{stp,step,igs,iges},
-models/corpus/*.{stp,step,igs,iges}[.gz] and models/generated/*.step, the generator's failures
+models/corpus/*.{stp,step,igs,iges}[.gz] and models/generated/*.step[.gz], the generator's failures
 kept reduced) and every relative tolerance `rel`, or for N models of the seeded generator
 (tools/cad_generator.py; `--generate N --gen-seed S [--gen-start K] [--reduce-to DIR]`):
 
@@ -1004,7 +1004,7 @@ def load_known(path):
 
 def default_files():
     fs = []
-    for pat in ("models/*.stp", "models/*.step", "models/generated/*.step", "models/corpus/*.stp", "models/corpus/*.step",
+    for pat in ("models/*.stp", "models/*.step", "models/generated/*.step", "models/generated/*.step.gz", "models/corpus/*.stp", "models/corpus/*.step",
                 "models/corpus/*.stp.gz", "models/corpus/*.step.gz", "models/*.igs", "models/*.iges",
                 "models/corpus/*.igs", "models/corpus/*.iges", "models/corpus/*.igs.gz",
                 "models/corpus/*.iges.gz"):
@@ -1111,6 +1111,42 @@ def self_test(args):
 # ----------------------------------------------------------------------------- generated models
 
 
+def build_isolated(gen, rec, step):
+    """gen.build_step in a forked child: OCCT can crash on a recipe (seed 1 model 109: a
+    segmentation fault), which must cost that model only, not the run. A crash is
+    gen.Dropped."""
+    import multiprocessing as mp
+    import pickle
+
+    out = step + ".result"
+
+    def child():
+        try:
+            r = ("ok", gen.build_step(rec, step))
+        except gen.Dropped as e:
+            r = ("dropped", str(e))
+        except BaseException as e:  # noqa: BLE001 - reported to the parent as it is
+            r = ("error", "%s: %s" % (type(e).__name__, e))
+        with open(out, "wb") as fh:
+            pickle.dump(r, fh)
+
+    if os.path.exists(out):
+        os.remove(out)
+    p = mp.get_context("fork").Process(target=child)
+    p.start()
+    p.join()
+    if not os.path.exists(out):
+        raise gen.Dropped("OCCT crashed building it (exit code %s)" % p.exitcode)
+    with open(out, "rb") as fh:
+        kind, value = pickle.load(fh)
+    os.remove(out)
+    if kind == "ok":
+        return value
+    if kind == "dropped":
+        raise gen.Dropped(value)
+    raise RuntimeError("building the model failed: " + value)
+
+
 def judge_generated(args):
     """Build models of the seeded generator and judge each like a file; a failing model is
     reduced (cad_generator.reduce_recipe) when --reduce-to is given. Exit 1 on any failure."""
@@ -1125,7 +1161,7 @@ def judge_generated(args):
 
     def judge(rec, name):
         step = os.path.join(work, name + ".step")
-        info = gen.build_step(rec, step)
+        info = build_isolated(gen, rec, step)
         return info, run_file(step, rels, args.patchwork, args.max_samples, work, args.seed)
 
     try:
