@@ -72,6 +72,33 @@ fn main() {
             }
         }
     }
+    if let Ok(at) = std::env::var("FACE_PROBE_AT") {
+        // `u,v;u,v;…`: the surface's points there.
+        use patchwork::model::trimmed::SurfaceEval;
+        for pair in at.split(';') {
+            let c: Vec<f64> = pair
+                .split(',')
+                .filter_map(|x| x.trim().parse().ok())
+                .collect();
+            if let [u, v] = c[..] {
+                let uv = glam::DVec2::new(u, v);
+                let (su, sv) = face.derivs(uv);
+                let h = 1e-6;
+                let fu = (face.point(uv + glam::DVec2::X * h)
+                    - face.point(uv - glam::DVec2::X * h))
+                    / (2.0 * h);
+                let fv = (face.point(uv + glam::DVec2::Y * h)
+                    - face.point(uv - glam::DVec2::Y * h))
+                    / (2.0 * h);
+                println!(
+                    "  S({u}, {v}) = {:.6}; Su {su:.5} (fd {fu:.5}); Sv {sv:.5} (fd {fv:.5})",
+                    face.point(uv)
+                );
+                let q = face.point(uv);
+                println!("    project(S) = {:?}", face.project(q, None));
+            }
+        }
+    }
     if std::env::var_os("FACE_PROBE_SCAN").is_some() {
         use patchwork::model::trimmed::SurfaceEval;
         let e = &face.loops[0][0].edge;

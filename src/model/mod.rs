@@ -9,6 +9,7 @@ pub mod knots;
 pub mod memory;
 pub mod merge;
 pub mod mesh;
+pub mod nurbs;
 pub mod poles;
 pub mod select;
 pub mod trimmed;

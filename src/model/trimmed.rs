@@ -12,6 +12,10 @@ use truck_stepio::r#in::alias::re_exports::{
 pub use truck_stepio::r#in::alias::{Curve3D, Surface as TruckSurface};
 
 use super::Sphere;
+use super::nurbs::{FastSurface, NurbsSurface};
+
+mod project;
+use project::{KEEP_GUESSES, nearest_of_grid};
 
 pub(crate) fn to_dvec(p: Point3) -> DVec3 {
     DVec3::new(p.x, p.y, p.z)
@@ -220,9 +224,37 @@ pub struct TrimmedFace {
     /// NURBS: S(u_min, v) = S(u_max, v)): `(start, period)`. The tessellator unwraps border
     /// parameters across that seam as for a periodic surface, and evaluation wraps back.
     pub closed: (Interval, Interval),
+    /// The surface as we evaluate it ourselves (`model::nurbs`: B-splines without truck's
+    /// allocations, offsets of B-splines truck has no type for), when it is one; every
+    /// evaluation of the face goes through it. Made from `surface` by
+    /// [`TrimmedFace::fast_surface`]; replace both together.
+    pub fast: Option<Arc<FastSurface>>,
 }
 
 impl TrimmedFace {
+    /// Our evaluation of `surface` when it is a B-spline we take (see [`TrimmedFace::fast`]).
+    pub fn fast_surface(surface: &TruckSurface) -> Option<Arc<FastSurface>> {
+        NurbsSurface::of(surface).map(|n| Arc::new(FastSurface::Nurbs(n)))
+    }
+
+    /// The surface's point at `uv` (no seam wrapping).
+    fn at(&self, uv: DVec2) -> DVec3 {
+        match &self.fast {
+            Some(f) => f.eval(uv, 0)[0],
+            None => self.surface.point(uv),
+        }
+    }
+
+    fn at_derivs(&self, uv: DVec2) -> (DVec3, DVec3) {
+        match &self.fast {
+            Some(f) => {
+                let d = f.eval(uv, 1);
+                (d[1], d[2])
+            }
+            None => self.surface.derivs(uv),
+        }
+    }
+
     /// Detects directions in which `surface` closes on itself (see [`TrimmedFace::closed`]),
     /// to relative tolerance `tol` of its size.
     pub fn closed_directions(surface: &TruckSurface, tol: f64) -> (Interval, Interval) {
@@ -262,29 +294,18 @@ impl TrimmedFace {
         };
         let (((u0, u1), (v0, v1)), widened) = self.guess_range((u0, u1), (v0, v1));
         const N: usize = 24;
-        const KEEP: usize = 8;
         // A widened direction across a periodic one (a cone's or cylinder's axis) gets 4× the
         // steps: on a wide cone near its apex the near nappe's grid points can all be nearer
         // than the far nappe's (trj4 #4134 at 24 steps). A plane (nothing periodic, convex
         // distance) keeps 24 × 24: this search runs at each loop's start in every tessellation.
         let (nu, nv) = (N * widened.0, N * widened.1);
-        let mut best: Vec<(f64, DVec2)> = Vec::with_capacity(KEEP + 1);
-        for i in 0..=nu {
-            for j in 0..=nv {
-                let uv = DVec2::new(
-                    u0 + (u1 - u0) * i as f64 / nu as f64,
-                    v0 + (v1 - v0) * j as f64 / nv as f64,
-                );
-                let d = self.surface.point(uv).distance_squared(p);
-                if !d.is_finite() || best.len() == KEEP && d >= best[KEEP - 1].0 {
-                    continue;
-                }
-                let at = best.partition_point(|b| b.0 <= d);
-                best.insert(at, (d, uv));
-                best.truncate(KEEP);
-            }
-        }
-        best.into_iter().map(|b| b.1).collect()
+        nearest_of_grid(p, KEEP_GUESSES, nu, nv, |i, j| {
+            let uv = DVec2::new(
+                u0 + (u1 - u0) * i as f64 / nu as f64,
+                v0 + (v1 - v0) * j as f64 / nv as f64,
+            );
+            (uv, self.at(uv))
+        })
     }
 
     /// The range the coarse guesses cover: the surface's finite range, except that a direction
@@ -307,8 +328,8 @@ impl TrimmedFace {
         let (ku, kv) = knot_bounds(&self.surface);
         let (pu, pv) = self.periods();
         let mid = DVec2::new(0.5 * (u.0 + u.1), 0.5 * (v.0 + v.1));
-        let (su, sv) = self.surface.derivs(mid);
-        let reach = self.surface.point(mid).distance(self.bounds.center) + self.bounds.radius;
+        let (su, sv) = self.at_derivs(mid);
+        let reach = self.at(mid).distance(self.bounds.center) + self.bounds.radius;
         let widen = |r: (f64, f64), knots: Interval, period: Option<f64>, speed: f64, across| {
             let h = 3.0 * reach / speed;
             let c = 0.5 * (r.0 + r.1);
@@ -429,15 +450,21 @@ impl TrimmedFace {
 
 impl SurfaceEval for TrimmedFace {
     fn point(&self, uv: DVec2) -> DVec3 {
-        self.surface.point(self.wrap(uv))
+        self.at(self.wrap(uv))
     }
 
     fn derivs(&self, uv: DVec2) -> (DVec3, DVec3) {
-        self.surface.derivs(self.wrap(uv))
+        self.at_derivs(self.wrap(uv))
     }
 
     fn second_derivs(&self, uv: DVec2) -> (DVec3, DVec3, DVec3) {
-        self.surface.second_derivs(self.wrap(uv))
+        match &self.fast {
+            Some(f) => {
+                let d = f.eval(self.wrap(uv), 2);
+                (d[3], d[4], d[5])
+            }
+            None => self.surface.second_derivs(self.wrap(uv)),
+        }
     }
 
     /// Best of: truck's search from the (wrapped) hint or a coarse guess, polished by
@@ -449,11 +476,16 @@ impl SurfaceEval for TrimmedFace {
             None => self.coarse_guesses(p),
         };
         let start = guesses.first().map(|h| self.wrap(*h));
-        let truck = self
-            .surface
-            .project(p, start)
-            .map(|uv| self.wrap(uv))
-            .and_then(|uv| self.newton(p, uv));
+        // Truck's own search evaluates truck's surface, which is not this face's where we
+        // evaluate it ourselves (an offset): Gauss–Newton from the guesses alone then.
+        let truck = match self.fast {
+            Some(_) => None,
+            None => self
+                .surface
+                .project(p, start)
+                .map(|uv| self.wrap(uv))
+                .and_then(|uv| self.newton(p, uv)),
+        };
         let off = |uv: &DVec2| self.point(*uv).distance(p);
         let mut found: Vec<DVec2> = truck
             .into_iter()

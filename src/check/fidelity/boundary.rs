@@ -121,8 +121,10 @@ impl Boundary {
             }
             let mut out: Vec<(DVec3, DVec2, bool)> = Vec::with_capacity(pts.len() + 1);
             let mut prev: Option<DVec2> = None;
+            let far = 1e-3 * face.bounds.radius;
+            let mut fine_left = true;
             for &(p, seam) in &pts {
-                let Some(mut uv) = face.project(p, prev).or_else(|| face.project(p, None)) else {
+                let Some(mut uv) = face.project_along(p, prev, far, &mut fine_left) else {
                     continue;
                 };
                 if let Some(q) = prev {

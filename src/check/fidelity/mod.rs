@@ -225,7 +225,18 @@ pub fn measure(
         let hint = match vertex_uv.get(t[0] as usize).copied().flatten() {
             Some(uv) => uv,
             None => {
-                let uv = face.project(corners[0], None).unwrap_or_default();
+                // A vertex lies on the surface: from a neighbour's parameter when that lands
+                // on it, else searched (finely when the coarse search ends on another sheet,
+                // a thread's next turn).
+                let on = (0.25 * eps).max(1e-3 * face.bounds.radius);
+                let from_neighbour = t[1..]
+                    .iter()
+                    .find_map(|&i| vertex_uv.get(i as usize).copied().flatten())
+                    .and_then(|h| face.project(corners[0], Some(h)))
+                    .filter(|uv| face.point(*uv).distance(corners[0]) <= on);
+                let uv = from_neighbour
+                    .or_else(|| face.project_on(corners[0], None, on).0)
+                    .unwrap_or_default();
                 if let Some(c) = vertex_uv.get_mut(t[0] as usize) {
                     *c = Some(uv);
                 }
@@ -241,12 +252,26 @@ pub fn measure(
                 // search can end at a cone's apex or across a seam).
                 let near = face.project(p, Some(prev));
                 let off = |uv: &DVec2| face.point(*uv).distance(p);
-                let uv = match near {
-                    Some(uv) if off(&uv) <= 0.25 * eps => Some(uv),
-                    _ => [near, face.project(p, None), face.project(p, Some(hint))]
+                let good = |uv: &Option<DVec2>| uv.is_some_and(|uv| off(&uv) <= 0.25 * eps);
+                let uv = if good(&near) {
+                    near
+                } else {
+                    // From the triangle's corner next, from scratch (a grid search) last —
+                    // unless both starts end at one point: skipping the search can only keep
+                    // a farther foot point, so the error measured only grows (never blind).
+                    let corner = face.project(p, Some(hint));
+                    let agree = match (near, corner) {
+                        (Some(a), Some(b)) => face.point(a).distance(face.point(b)) <= 1e-3 * eps,
+                        _ => false,
+                    };
+                    let scratch = match good(&corner) || agree {
+                        true => None,
+                        false => face.project(p, None),
+                    };
+                    [near, corner, scratch]
                         .into_iter()
                         .flatten()
-                        .min_by(|a, b| off(a).total_cmp(&off(b))),
+                        .min_by(|a, b| off(a).total_cmp(&off(b)))
                 };
                 out.samples += 1;
                 let Some(uv) = uv else {

@@ -278,6 +278,7 @@ pub fn face(d: &mut Decoder<'_, '_>, e: &Entry) -> Result<TrimmedFace, IgesError
             reason: "a boundary point is not finite".into(),
         });
     }
+    let fast = TrimmedFace::fast_surface(&surface);
     Ok(TrimmedFace {
         id: e.de as u64,
         closed,
@@ -285,6 +286,7 @@ pub fn face(d: &mut Decoder<'_, '_>, e: &Entry) -> Result<TrimmedFace, IgesError
         loops,
         domain_left: true,
         bounds: Sphere::around(pts.iter().copied()),
+        fast,
     })
 }
 

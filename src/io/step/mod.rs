@@ -32,6 +32,7 @@ use truck_stepio::r#in::{CurveAnyHolder, EdgeCurve, EdgeCurveHolder, FaceSurface
 
 use super::LoadError;
 use crate::isolate::isolated;
+use crate::model::nurbs::{FastSurface, NurbsSurface};
 use crate::model::trimmed::{LoopEdge, TrimEdge, TruckSurface, to_dvec};
 use crate::model::{Sphere, TrimmedFace};
 
@@ -153,7 +154,8 @@ pub fn read_with(
 
     complete_placements(&mut table);
     untrim_swept_curves(&mut table, &file);
-    let (offsets, offsets_refused) = offset::resolve(&mut table, &file, structure.plane_angle_rad);
+    let offsets = offset::resolve(&mut table, &file, structure.plane_angle_rad);
+    let offsets_refused = &offsets.refused;
 
     let mut warnings = structure.warnings.clone();
     if !structure.unsupported.is_empty() {
@@ -190,7 +192,7 @@ pub fn read_with(
         warnings.push(format!(
             "{} of {} OFFSET_SURFACE entities not read, their faces not drawn (#{id}: {reason}{})",
             offsets_refused.len(),
-            offsets_refused.len() + offsets.len(),
+            offsets_refused.len() + offsets.replaced.len() + offsets.evaluated.len(),
             if offsets_refused.len() > 1 {
                 "; …"
             } else {
@@ -235,7 +237,8 @@ pub fn read_with(
         vertex_loops: &vertex_loops,
         angle_rad: structure.plane_angle_rad,
         uncertainty: structure.uncertainty,
-        offsets_refused: &offsets_refused,
+        offsets_refused,
+        evaluated_offsets: &offsets.evaluated,
     };
     let edges = EdgeCache::default();
     let results: Vec<(Result<TrimmedFace, String>, Vec<u64>)> = {
@@ -452,6 +455,8 @@ struct FaceSource<'a> {
     uncertainty: Option<f64>,
     /// `OFFSET_SURFACE`s not replaced ([`offset::resolve`]), and why.
     offsets_refused: &'a BTreeMap<u64, String>,
+    /// Offset surface → (its basis, distance) we evaluate (`offset::Offsets::evaluated`).
+    evaluated_offsets: &'a BTreeMap<u64, (u64, f64)>,
 }
 
 /// Converts face `id`; `reached` gets every edge curve the face looks up, in order.
@@ -468,6 +473,7 @@ fn convert_face(
         angle_rad,
         uncertainty,
         offsets_refused,
+        evaluated_offsets,
     } = *src;
     let face: FaceSurfaceHolder = if let Some(f) = table.face_surface.get(&id) {
         f.clone()
@@ -481,7 +487,13 @@ fn convert_face(
         );
     };
     let geometry = holder_ref(&face.face_geometry);
-    let surface_any = face.face_geometry.clone().into_owned(table).map_err(|e| {
+    // An offset of a B-spline: read on its basis, evaluated as the offset (`offset`).
+    let offset = geometry.and_then(|g| evaluated_offsets.get(&g).copied());
+    let holder = match offset {
+        Some((basis, _)) => PlaceHolder::Ref(Name::Entity(basis)),
+        None => face.face_geometry.clone(),
+    };
+    let surface_any = holder.into_owned(table).map_err(|e| {
         match geometry.and_then(|g| Some((g, offsets_refused.get(&g)?))) {
             Some((g, why)) => format!("surface: OFFSET_SURFACE #{g}: {why}"),
             None => format!("surface: {e}"),
@@ -567,6 +579,16 @@ fn convert_face(
     let pts = crate::model::trimmed::loop_points(&loops);
     let closed =
         isolated(|| TrimmedFace::closed_directions(&surface, 1e-9)).unwrap_or((None, None));
+    let fast = match offset {
+        Some((_, distance)) => Some(Arc::new(match NurbsSurface::of(&surface) {
+            Some(base) => FastSurface::Offset { base, distance },
+            None => FastSurface::OffsetOfTruck {
+                base: surface.clone(),
+                distance,
+            },
+        })),
+        None => TrimmedFace::fast_surface(&surface),
+    };
     Ok(TrimmedFace {
         id,
         closed,
@@ -574,6 +596,7 @@ fn convert_face(
         loops,
         domain_left: face.same_sense,
         bounds: Sphere::around(pts.iter().copied()),
+        fast,
     })
 }
 

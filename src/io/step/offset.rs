@@ -12,11 +12,13 @@
 //! from the axis or centre). Offsets of offsets add their distances. Every edge on an offset
 //! surface is read from its 3D curve (`super::convert_edge`) whether or not the surface is.
 //!
-//! Not yet read, with the reason given and their faces skipped naming it: offsets of
-//! B-spline, NURBS and swept bases (the offset is no surface truck has; it needs a fit within
-//! tolerance over the faces' part of the basis, and truck's B-spline evaluation costs
-//! O(control points) per point, so the fit must stay small), and offsets crossing their
-//! basis's axis, centre or apex.
+//! An offset of a B-spline, NURBS or swept (extrusion, revolution) basis is no surface truck
+//! has: its faces are read on the basis (truck's table keeps the offset entity unread;
+//! [`resolve`] returns the basis and the distance), and evaluated as the offset by
+//! `model::nurbs::FastSurface::Offset` (`OffsetOfTruck` for swept bases).
+//!
+//! Not yet read, with the reason given and their faces skipped naming it: offsets of other
+//! bases, and offsets crossing their basis's axis, centre or apex.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -31,42 +33,61 @@ use crate::isolate::isolated;
 /// Deepest chain of offsets of offsets followed.
 const MAX_CHAIN: usize = 8;
 
-/// Replaces every `OFFSET_SURFACE` of `file` in `table` (see the module doc). `rad` is the
-/// file's radians per plane-angle unit. Returns the ids of the surfaces replaced and, by
-/// entity id, why the others were not.
-pub fn resolve(
-    table: &mut Table,
-    file: &P21File,
-    rad: Option<f64>,
-) -> (Vec<u64>, BTreeMap<u64, String>) {
+/// The offsets of `file`'s surfaces, as [`resolve`] read them.
+#[derive(Debug, Default)]
+pub struct Offsets {
+    /// Offset surfaces replaced in truck's table by the elementary surface they are.
+    pub replaced: Vec<u64>,
+    /// Offset surface id → (its B-spline, NURBS or swept basis, the total distance): faces on
+    /// it are read on the basis and evaluated as the offset.
+    pub evaluated: BTreeMap<u64, (u64, f64)>,
+    /// Offset surface id → why it is not read.
+    pub refused: BTreeMap<u64, String>,
+}
+
+/// What one offset surface became.
+enum Replacement {
+    /// Statements written for truck's table.
+    Written,
+    /// An offset of this B-spline, NURBS or swept basis by this distance.
+    OfBasis(u64, f64),
+}
+
+/// Replaces every `OFFSET_SURFACE` of `file` with an elementary basis in `table`, and lists
+/// those of B-spline bases and the refused (see the module doc). `rad` is the file's radians
+/// per plane-angle unit.
+pub fn resolve(table: &mut Table, file: &P21File, rad: Option<f64>) -> Offsets {
     let mut next = file.entities.iter().map(|e| e.id).max().unwrap_or(0) + 1;
-    let mut done = Vec::new();
-    let mut refused = BTreeMap::new();
+    let mut out = Offsets::default();
     for e in &file.entities {
         if e.part("OFFSET_SURFACE").is_none() {
             continue;
         }
         let mut text = String::new();
-        let result =
-            replacement(file, e.id, rad.unwrap_or(1.0), &mut next, &mut text).and_then(|()| {
-                let instances = super::chunks::entity_instances(&text)
-                    .map_err(|err| format!("its replacement did not parse: {err}"))?;
-                table.dummy.remove(&e.id);
-                for inst in &instances {
-                    if !matches!(isolated(|| table.push_instance(inst)), Ok(Ok(_))) {
-                        return Err("truck-stepio did not accept its replacement".into());
-                    }
+        let result = replacement(file, e.id, rad.unwrap_or(1.0), &mut next, &mut text);
+        if let Ok(Replacement::OfBasis(basis, d)) = result {
+            out.evaluated.insert(e.id, (basis, d));
+            continue;
+        }
+        let result = result.and_then(|_| {
+            let instances = super::chunks::entity_instances(&text)
+                .map_err(|err| format!("its replacement did not parse: {err}"))?;
+            table.dummy.remove(&e.id);
+            for inst in &instances {
+                if !matches!(isolated(|| table.push_instance(inst)), Ok(Ok(_))) {
+                    return Err("truck-stepio did not accept its replacement".into());
                 }
-                Ok(())
-            });
+            }
+            Ok(())
+        });
         match result {
-            Ok(()) => done.push(e.id),
+            Ok(()) => out.replaced.push(e.id),
             Err(why) => {
-                refused.insert(e.id, why);
+                out.refused.insert(e.id, why);
             }
         }
     }
-    (done, refused)
+    out
 }
 
 /// Writes the statements replacing offset surface `id` into `out` (new entities numbered from
@@ -77,7 +98,7 @@ fn replacement(
     rad: f64,
     next: &mut u64,
     out: &mut String,
-) -> Result<(), String> {
+) -> Result<Replacement, String> {
     // Follow offsets of offsets down to the basis, adding distances.
     let mut basis = id;
     let mut d = 0.0;
@@ -117,7 +138,7 @@ fn replacement(
         let moved = shifted(m, m.z_axis.truncate() * d);
         let pos = write_placement(moved, next, out);
         writeln!(out, "#{id}=PLANE('',#{pos});").ok();
-        return Ok(());
+        return Ok(Replacement::Written);
     }
     for (name, radius_arg) in [
         ("CYLINDRICAL_SURFACE", 2),
@@ -141,7 +162,7 @@ fn replacement(
             } else {
                 writeln!(out, "#{id}={name}('',#{pos},{});", real(radius)).ok();
             }
-            return Ok(());
+            return Ok(Replacement::Written);
         }
     }
     if let Some(r) = entity.part("CONICAL_SURFACE") {
@@ -162,12 +183,19 @@ fn replacement(
             real(alpha)
         )
         .ok();
-        return Ok(());
+        return Ok(Replacement::Written);
     }
-    // B-spline, NURBS and swept bases: the offset is no surface truck has (a fit within
-    // tolerance is future work: see the module doc).
+    let evaluated = [
+        "B_SPLINE_SURFACE_WITH_KNOTS",
+        "B_SPLINE_SURFACE",
+        "SURFACE_OF_LINEAR_EXTRUSION",
+        "SURFACE_OF_REVOLUTION",
+    ];
+    if evaluated.iter().any(|n| entity.has(n)) {
+        return Ok(Replacement::OfBasis(basis, d));
+    }
     Err(format!(
-        "basis #{basis} ({}): offsets of B-spline and swept surfaces are not read yet",
+        "basis #{basis} ({}): offsets of this surface are not read yet",
         entity.type_name()
     ))
 }
