@@ -285,14 +285,9 @@ impl TrimmedFace {
     /// (truck's searches need a start on some surfaces; a self-intersecting spindle torus has
     /// two sheets close together, so one guess is not enough).
     fn coarse_guesses(&self, p: DVec3) -> Vec<DVec2> {
-        let (ru, rv) = parameter_bounds(&self.surface);
-        let (pu, pv) = self.surface.periods();
-        let (Some((u0, u1)), Some((v0, v1))) =
-            (ru.or(pu.map(|p| (0.0, p))), rv.or(pv.map(|p| (0.0, p))))
-        else {
+        let Some((((u0, u1), (v0, v1)), widened)) = self.search_range() else {
             return Vec::new();
         };
-        let (((u0, u1), (v0, v1)), widened) = self.guess_range((u0, u1), (v0, v1));
         const N: usize = 24;
         // A widened direction across a periodic one (a cone's or cylinder's axis) gets 4× the
         // steps: on a wide cone near its apex the near nappe's grid points can all be nearer
@@ -306,6 +301,17 @@ impl TrimmedFace {
             );
             (uv, self.at(uv))
         })
+    }
+
+    /// The range grid searches cover ([`TrimmedFace::guess_range`] of the finite range or
+    /// period), `None` where a direction has neither.
+    #[allow(clippy::type_complexity)]
+    fn search_range(&self) -> Option<(((f64, f64), (f64, f64)), (usize, usize))> {
+        let (ru, rv) = parameter_bounds(&self.surface);
+        let (pu, pv) = self.surface.periods();
+        let u = ru.or(pu.map(|p| (0.0, p)))?;
+        let v = rv.or(pv.map(|p| (0.0, p)))?;
+        Some(self.guess_range(u, v))
     }
 
     /// The range the coarse guesses cover: the surface's finite range, except that a direction

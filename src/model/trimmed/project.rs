@@ -4,7 +4,7 @@
 
 use glam::{DVec2, DVec3};
 
-use super::{SurfaceEval, TrimmedFace, parameter_bounds};
+use super::{SurfaceEval, TrimmedFace};
 
 /// Guesses kept from a grid search for the nearest point.
 pub(super) const KEEP_GUESSES: usize = 8;
@@ -45,14 +45,9 @@ impl TrimmedFace {
     /// steps along the helix (generated model gen-1-94: every loop point on the wrong turn,
     /// 0.09 off, error 190 ε) — then has a grid point nearer than `off`.
     fn fine_guesses(&self, p: DVec3, off: f64) -> Vec<DVec2> {
-        let (ru, rv) = parameter_bounds(&self.surface);
-        let (pu, pv) = self.surface.periods();
-        let (Some((u0, u1)), Some((v0, v1))) =
-            (ru.or(pu.map(|p| (0.0, p))), rv.or(pv.map(|p| (0.0, p))))
-        else {
+        let Some((((u0, u1), (v0, v1)), _)) = self.search_range() else {
             return Vec::new();
         };
-        let (((u0, u1), (v0, v1)), _) = self.guess_range((u0, u1), (v0, v1));
         let at = |a: f64, b: f64| self.at(DVec2::new(u0 + (u1 - u0) * a, v0 + (v1 - v0) * b));
         // The longest of 5 isolines per direction, as polylines of 32 segments.
         let extent = |along_u: bool| {
