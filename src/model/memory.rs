@@ -83,9 +83,15 @@ impl Scene {
     }
 }
 
-/// A trimmed face behind its `Arc` (two counters), its loops, and the edges not seen yet.
+/// A trimmed face behind its `Arc` (two counters), its loops, its `fast` evaluation, and the
+/// edges not seen yet.
 fn trimmed_face_bytes(f: &TrimmedFace, edges: &mut HashSet<*const TrimEdge>) -> usize {
     let mut bytes = 2 * size_of::<usize>() + size_of::<TrimmedFace>() + vec_bytes(&f.loops);
+    // Our evaluation's copy of a B-spline's knots and control points, behind its own `Arc`.
+    if let Some(fast) = &f.fast {
+        bytes +=
+            2 * size_of::<usize>() + size_of::<super::nurbs::FastSurface>() + fast.heap_bytes();
+    }
     for l in &f.loops {
         bytes += vec_bytes::<LoopEdge>(l);
         for e in l {

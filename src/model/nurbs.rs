@@ -50,6 +50,18 @@ pub enum FastSurface {
 }
 
 impl FastSurface {
+    /// Bytes behind this value (knot vectors and control points; a truck base's own heap
+    /// is not counted, as a face's truck surface is not).
+    pub fn heap_bytes(&self) -> usize {
+        match self {
+            FastSurface::Nurbs(n) | FastSurface::Offset { base: n, .. } => {
+                (n.knots.0.capacity() + n.knots.1.capacity()) * size_of::<f64>()
+                    + n.points.capacity() * size_of::<DVec4>()
+            }
+            FastSurface::OffsetOfTruck { .. } => 0,
+        }
+    }
+
     /// Point, first and (for `order` 2) second derivatives.
     pub fn eval(&self, uv: DVec2, order: usize) -> Derivs {
         match self {
