@@ -260,7 +260,8 @@ fn offset_eval(
     uv: DVec2,
     order: usize,
 ) -> Derivs {
-    let b = base(uv, order.max(1) + 1);
+    // The point needs the base's first derivatives (the normal), each further order one more.
+    let b = base(uv, order.min(1) + 1);
     let first = |b: &Derivs| {
         let m = b[1].cross(b[2]);
         let len = m.length();
@@ -271,8 +272,12 @@ fn offset_eval(
         let mv = b[4].cross(b[2]) + b[1].cross(b[5]);
         (n, dn(mu), dn(mv))
     };
-    let (n, nu, nv) = first(&b);
     let mut out = [DVec3::ZERO; 6];
+    if order == 0 {
+        out[0] = b[0] + distance * b[1].cross(b[2]).normalize();
+        return out;
+    }
+    let (n, nu, nv) = first(&b);
     out[0] = b[0] + distance * n;
     out[1] = b[1] + distance * nu;
     out[2] = b[2] + distance * nv;

@@ -285,7 +285,7 @@ impl TrimmedFace {
     /// (truck's searches need a start on some surfaces; a self-intersecting spindle torus has
     /// two sheets close together, so one guess is not enough).
     fn coarse_guesses(&self, p: DVec3) -> Vec<DVec2> {
-        let Some((((u0, u1), (v0, v1)), widened)) = self.search_range() else {
+        let Some((range, widened)) = self.search_range() else {
             return Vec::new();
         };
         const N: usize = 24;
@@ -294,13 +294,7 @@ impl TrimmedFace {
         // than the far nappe's (trj4 #4134 at 24 steps). A plane (nothing periodic, convex
         // distance) keeps 24 × 24: this search runs at each loop's start in every tessellation.
         let (nu, nv) = (N * widened.0, N * widened.1);
-        nearest_of_grid(p, KEEP_GUESSES, nu, nv, |i, j| {
-            let uv = DVec2::new(
-                u0 + (u1 - u0) * i as f64 / nu as f64,
-                v0 + (v1 - v0) * j as f64 / nv as f64,
-            );
-            (uv, self.at(uv))
-        })
+        nearest_of_grid(p, KEEP_GUESSES, range, (nu, nv), |uv| self.at(uv))
     }
 
     /// The range grid searches cover ([`TrimmedFace::guess_range`] of the finite range or

@@ -487,7 +487,8 @@ fn convert_face(
         );
     };
     let geometry = holder_ref(&face.face_geometry);
-    // An offset of a B-spline: read on its basis, evaluated as the offset (`offset`).
+    // An offset of a B-spline or swept basis: read on the basis, evaluated as the offset
+    // (`offset`).
     let offset = geometry.and_then(|g| evaluated_offsets.get(&g).copied());
     let holder = match offset {
         Some((basis, _)) => PlaceHolder::Ref(Name::Entity(basis)),

@@ -11,20 +11,23 @@ pub(super) const KEEP_GUESSES: usize = 8;
 /// Most points of [`TrimmedFace::fine_guesses`]' grid.
 const FINE_GRID: usize = 4096;
 
-/// The `keep` parameters of the `(nu + 1) × (nv + 1)` grid `at(i, j) → (uv, S(uv))` nearest
-/// to `p`, nearest first.
+/// The `keep` parameters of the `(nu + 1) × (nv + 1)` grid over `((u0, u1), (v0, v1))`
+/// nearest to `p` (`at`: the surface's point), nearest first.
 pub(super) fn nearest_of_grid(
     p: DVec3,
     keep: usize,
-    nu: usize,
-    nv: usize,
-    at: impl Fn(usize, usize) -> (DVec2, DVec3),
+    ((u0, u1), (v0, v1)): ((f64, f64), (f64, f64)),
+    (nu, nv): (usize, usize),
+    at: impl Fn(DVec2) -> DVec3,
 ) -> Vec<DVec2> {
     let mut best: Vec<(f64, DVec2)> = Vec::with_capacity(keep + 1);
     for i in 0..=nu {
         for j in 0..=nv {
-            let (uv, q) = at(i, j);
-            let d = q.distance_squared(p);
+            let uv = DVec2::new(
+                u0 + (u1 - u0) * i as f64 / nu as f64,
+                v0 + (v1 - v0) * j as f64 / nv as f64,
+            );
+            let d = at(uv).distance_squared(p);
             if !d.is_finite() || best.len() == keep && d >= best[keep - 1].0 {
                 continue;
             }
@@ -45,9 +48,10 @@ impl TrimmedFace {
     /// steps along the helix (generated model gen-1-94: every loop point on the wrong turn,
     /// 0.09 off, error 190 ε) — then has a grid point nearer than `off`.
     fn fine_guesses(&self, p: DVec3, off: f64) -> Vec<DVec2> {
-        let Some((((u0, u1), (v0, v1)), _)) = self.search_range() else {
+        let Some((range, _)) = self.search_range() else {
             return Vec::new();
         };
+        let ((u0, u1), (v0, v1)) = range;
         let at = |a: f64, b: f64| self.at(DVec2::new(u0 + (u1 - u0) * a, v0 + (v1 - v0) * b));
         // The longest of 5 isolines per direction, as polylines of 32 segments.
         let extent = |along_u: bool| {
@@ -69,13 +73,7 @@ impl TrimmedFace {
         let steps = |l: f64| ((l / h).ceil() as usize).clamp(1, FINE_GRID);
         let (nu, nv) = (steps(lu), steps(lv));
         let (nu, nv) = (nu.min(FINE_GRID / nv).max(1), nv.min(FINE_GRID / nu).max(1));
-        nearest_of_grid(p, KEEP_GUESSES, nu, nv, |i, j| {
-            let uv = DVec2::new(
-                u0 + (u1 - u0) * i as f64 / nu as f64,
-                v0 + (v1 - v0) * j as f64 / nv as f64,
-            );
-            (uv, self.at(uv))
-        })
+        nearest_of_grid(p, KEEP_GUESSES, range, (nu, nv), |uv| self.at(uv))
     }
 
     /// As [`SurfaceEval::project`] for a point that should lie on the surface (a point of a
