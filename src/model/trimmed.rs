@@ -163,7 +163,13 @@ fn locate(curve: &Curve3D, p: DVec3, range: Option<(f64, f64)>, tol: f64) -> Opt
     }
     let t0 = range.map_or(0.0, |r| r.0);
     let d = vec_to_dvec(curve.der(t0));
-    let mut t = t0 + (p - to_dvec(curve.subs(t0))).dot(d) / d.length_squared().max(1e-300);
+    let t = t0 + (p - to_dvec(curve.subs(t0))).dot(d) / d.length_squared().max(1e-300);
+    let t = newton_nearest(curve, p, t);
+    on(t).then_some(t)
+}
+
+/// Newton's iteration for the parameter of the point of `curve` nearest `p`, from `t`.
+fn newton_nearest(curve: &Curve3D, p: DVec3, mut t: f64) -> f64 {
     for _ in 0..30 {
         let r = to_dvec(curve.subs(t)) - p;
         let d1 = vec_to_dvec(curve.der(t));
@@ -178,7 +184,38 @@ fn locate(curve: &Curve3D, p: DVec3, range: Option<(f64, f64)>, tol: f64) -> Opt
             break;
         }
     }
-    on(t).then_some(t)
+    t
+}
+
+/// The point of `curve` nearest `p`, as a kernel projects a vertex onto its edge's curve to
+/// heal an edge whose vertex lies off it: the nearest of 129 samples over the curve's range
+/// (one period of a periodic curve), refined by Newton inside the range; on an unbounded
+/// curve (a line), Newton from the start. `None` when it is not finite.
+pub fn nearest_on_curve(curve: &Curve3D, p: DVec3) -> Option<DVec3> {
+    let curve = super::knots::clamp_curve(curve).unwrap_or_else(|| curve.clone());
+    let range = curve_range(&curve)
+        .filter(|(a, b)| a.is_finite() && b.is_finite())
+        .or_else(|| curve.period().map(|l| (0.0, l)));
+    let dist = |t: f64| to_dvec(curve.subs(t)).distance_squared(p);
+    let t = match range {
+        Some((a, b)) => {
+            const N: usize = 128;
+            let best = (0..=N)
+                .map(|i| a + (b - a) * i as f64 / N as f64)
+                .filter(|&t| dist(t).is_finite())
+                .min_by(|&s, &t| dist(s).total_cmp(&dist(t)))?;
+            let t = newton_nearest(&curve, p, best);
+            let inside = curve.period().is_some() || (a.min(b)..=a.max(b)).contains(&t);
+            if inside && dist(t) <= dist(best) {
+                t
+            } else {
+                best
+            }
+        }
+        None => locate(&curve, p, None, f64::INFINITY)?,
+    };
+    let q = to_dvec(curve.subs(t));
+    q.is_finite().then_some(q)
 }
 
 /// An edge of a loop, with the direction the loop runs it.

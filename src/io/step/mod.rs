@@ -15,6 +15,7 @@
 
 mod bspline_check;
 mod chunks;
+mod edge;
 pub mod offset;
 pub mod p21;
 mod ref_check;
@@ -28,21 +29,16 @@ use glam::DVec3;
 use truck_stepio::r#in::alias::re_exports::Point3;
 use truck_stepio::r#in::ruststep::ast::Name;
 use truck_stepio::r#in::ruststep::tables::{IntoOwned, PlaceHolder};
-use truck_stepio::r#in::{CurveAnyHolder, EdgeCurve, EdgeCurveHolder, FaceSurfaceHolder, Table};
+use truck_stepio::r#in::{EdgeCurveHolder, FaceSurfaceHolder, Table};
 
 use super::LoadError;
 use crate::isolate::isolated;
 use crate::model::nurbs::{FastSurface, NurbsSurface};
-use crate::model::trimmed::{LoopEdge, TrimEdge, TruckSurface, to_dvec};
+use crate::model::trimmed::{LoopEdge, TrimEdge, TruckSurface};
 use crate::model::{Sphere, TrimmedFace};
-
-/// How far (relative to the coordinates' size) an edge's vertices may lie from its curve.
-const EDGE_VERTEX_TOLERANCE: f64 = 1e-4;
-/// Vertices farther than that are still accepted within this many times the file's
-/// uncertainty ...
-const LOOSE_UNCERTAINTY_FACTOR: f64 = 10.0;
-/// ... or within this fraction of the edge's chord.
-const LOOSE_EDGE_FRACTION: f64 = 0.02;
+use edge::{
+    EDGE_VERTEX_TOLERANCE, Fit, LOOSE_EDGE_FRACTION, LOOSE_UNCERTAINTY_FACTOR, convert_edge,
+};
 
 /// A STEP file read: every face of the shells used, converted (not yet probed: see
 /// [`crate::prep::step`]), with the product structure that places them.
@@ -256,13 +252,20 @@ pub fn read_with(
             })
             .collect()
     };
-    // Loose edges in the order one thread converting the faces in order would have met them.
+    // Loose and healed edges in the order one thread converting the faces in order would have
+    // met them.
     let mut seen = std::collections::HashSet::new();
-    let loose: Vec<u64> = results
+    let (mut loose, mut healed) = (Vec::new(), Vec::new());
+    for e in results
         .iter()
         .flat_map(|(_, reached)| reached.iter().copied())
-        .filter(|&e| seen.insert(e) && edges.is_loose(e))
-        .collect();
+    {
+        match seen.insert(e).then(|| edges.fit(e)).flatten() {
+            Some(Fit::Loose) => loose.push(e),
+            Some(Fit::Healed(off)) => healed.push((e, off)),
+            _ => {}
+        }
+    }
     let converted: Vec<(u64, Result<TrimmedFace, String>)> = jobs
         .into_iter()
         .zip(results)
@@ -288,6 +291,20 @@ pub fn read_with(
         ));
     }
 
+    if !healed.is_empty() {
+        let list: Vec<String> = healed
+            .iter()
+            .take(5)
+            .map(|(e, d)| format!("#{e} by {d:.3e}"))
+            .collect();
+        warnings.push(format!(
+            "{} edges have vertices off their curve beyond the file's tolerance, healed as a \
+             kernel does, each vertex moved to its nearest point of the curve ({}{})",
+            healed.len(),
+            list.join(", "),
+            if healed.len() > 5 { ", …" } else { "" }
+        ));
+    }
     Ok(StepModel {
         path: p(),
         structure,
@@ -409,9 +426,8 @@ fn shell_faces(file: &p21::P21File, shell: u64) -> Vec<u64> {
         .unwrap_or_default()
 }
 
-/// An edge converted, and whether its vertices were accepted only within the loose tolerance;
-/// or why it cannot be used.
-type EdgeResult = Result<(Arc<TrimEdge>, bool), String>;
+/// An edge converted, and how its vertices lie on its curve; or why it cannot be used.
+type EdgeResult = Result<(Arc<TrimEdge>, Fit), String>;
 
 /// Edges shared by the faces converted in parallel: each converted once, by the first face to
 /// reach it (the others wait for it). A conversion that panicked leaves no result: the next
@@ -429,8 +445,11 @@ impl EdgeCache {
         self.cell(id).get_or_init(convert).clone()
     }
 
-    fn is_loose(&self, id: u64) -> bool {
-        matches!(self.cell(id).get(), Some(Ok((_, true))))
+    fn fit(&self, id: u64) -> Option<Fit> {
+        self.cell(id)
+            .get()
+            .and_then(|r| r.as_ref().ok())
+            .map(|r| r.1)
     }
 }
 
@@ -553,8 +572,8 @@ fn convert_face(
                     .edge_curve
                     .get(&ecid)
                     .ok_or_else(|| format!("edge #{ecid} is not a readable EDGE_CURVE"))?;
-                let (e, loose) = convert_edge(file, table, ecid, holder, uncertainty)?;
-                Ok((Arc::new(e), loose))
+                let (e, fit) = convert_edge(file, table, ecid, holder, uncertainty)?;
+                Ok((Arc::new(e), fit))
             })?;
             out.push(LoopEdge { edge, forward });
         }
@@ -572,7 +591,15 @@ fn convert_face(
         // Only a VERTEX_LOOP (at a pole): the face is the whole closed surface, a sphere.
         // Bounded as a kernel bounds it: its seam meridian, once each way (ShapeFix adds the
         // seam and the degenerate pole edges; the poles are points here).
-        loops = whole_surface_loop(&surface, id).into_iter().collect();
+        loops = whole_surface_loop(&surface, id, 0.0).into_iter().collect();
+    } else if vertex_bound
+        && let Some(seam) = seam_clear_of(&surface, &loops)
+        && let Some(whole) = whole_surface_loop(&surface, id, seam)
+    {
+        // A VERTEX_LOOP at a pole beside edge loops none of which runs around the surface:
+        // they are holes in the whole sphere (a sphere cut by small features), which reaches
+        // the pole. Without the whole surface's loop the holes alone were drawn.
+        loops.insert(0, whole);
     }
     if loops.is_empty() {
         return Err("the face has no edge loop".into());
@@ -608,7 +635,73 @@ const WHOLE_FACE_EDGE: u64 = 1 << 56;
 /// The loop bounding the whole of a sphere (face `face`): its parameter rectangle without the
 /// sides that are poles (points), i.e. the seam meridian up and down again. `None` for any
 /// other surface (a face bounded only by vertex loops elsewhere stays refused).
-fn whole_surface_loop(surface: &TruckSurface, face: u64) -> Option<Vec<LoopEdge>> {
+/// Where a sphere's seam can run clear of holes: the u of the middle of the widest gap
+/// between the loops' points seen around the sphere's axis (its poles are the ends of its v
+/// range; 16 points per edge). `None` when a loop runs around the axis (it bounds a cap, not
+/// a hole) or the surface has no v range.
+fn seam_clear_of(surface: &TruckSurface, loops: &[Vec<LoopEdge>]) -> Option<f64> {
+    use crate::model::trimmed::{SurfaceEval, parameter_bounds};
+    use glam::DVec2;
+    let tau = std::f64::consts::TAU;
+    let (v0, v1) = parameter_bounds(surface).1?;
+    let (south, north) = (
+        surface.point(DVec2::new(0.0, v0)),
+        surface.point(DVec2::new(0.0, v1)),
+    );
+    let centre = 0.5 * (south + north);
+    let axis = (north - south).try_normalize()?;
+    let mid = 0.5 * (v0 + v1);
+    let x = (surface.point(DVec2::new(0.0, mid)) - centre)
+        .reject_from_normalized(axis)
+        .try_normalize()?;
+    let mut y = axis.cross(x);
+    // u runs with the angle about the axis or against it.
+    if (surface.point(DVec2::new(0.1, mid)) - centre).dot(y) < 0.0 {
+        y = -y;
+    }
+    let size = north.distance(south);
+    let mut all = Vec::new();
+    for lp in loops {
+        let mut angles = Vec::new();
+        for le in lp {
+            let e = &le.edge;
+            for k in 0..16 {
+                let f = k as f64 / 16.0;
+                let f = if le.forward { f } else { 1.0 - f };
+                let d = e.point(e.t0 + (e.t1 - e.t0) * f) - centre;
+                // A point on the axis (a pole) has no angle.
+                if d.reject_from_normalized(axis).length() > 1e-9 * size {
+                    angles.push(d.dot(y).atan2(d.dot(x)).rem_euclid(tau));
+                }
+            }
+        }
+        let first = *angles.first()?;
+        let turn: f64 = angles
+            .iter()
+            .zip(angles.iter().skip(1).chain(std::iter::once(&first)))
+            .map(|(a, b)| {
+                let d = (b - a).rem_euclid(tau);
+                if d > 0.5 * tau { d - tau } else { d }
+            })
+            .sum();
+        if (turn / tau).round() != 0.0 {
+            return None;
+        }
+        all.extend(angles);
+    }
+    all.sort_by(f64::total_cmp);
+    let first = *all.first()?;
+    let (gap, at) = all
+        .iter()
+        .zip(all.iter().skip(1).chain(std::iter::once(&(first + tau))))
+        .map(|(a, b)| (b - a, 0.5 * (a + b)))
+        .max_by(|a, b| a.0.total_cmp(&b.0))?;
+    (gap > 0.0).then_some(at.rem_euclid(tau))
+}
+
+/// The loop of a whole sphere: its seam meridian at u = `seam` (and `seam` + 2π), once each
+/// way.
+fn whole_surface_loop(surface: &TruckSurface, face: u64, seam: f64) -> Option<Vec<LoopEdge>> {
     use crate::model::trimmed::{SurfaceEval, parameter_bounds, parameter_rectangle};
     use truck_stepio::r#in::alias::ElementarySurface;
     let TruckSurface::ElementarySurface(e) = surface else {
@@ -620,6 +713,7 @@ fn whole_surface_loop(surface: &TruckSurface, face: u64) -> Option<Vec<LoopEdge>
     let (ru, rv) = parameter_bounds(surface);
     let pu = surface.periods().0;
     let (u0, u1) = ru.or(pu.map(|p| (0.0, p)))?;
+    let (u0, u1) = (u0 + seam, u1 + seam);
     let (v0, v1) = rv?;
     let rect = parameter_rectangle(
         surface,
@@ -706,82 +800,6 @@ fn plane_from_file(file: &p21::P21File, face: u64) -> Option<TruckSurface> {
     let plane = Plane::new(pt(o), pt(o + x), pt(o + y));
     let s = TruckSurface::ElementarySurface(Box::new(ElementarySurface::Plane(plane)));
     surface_is_finite(&s).then_some(s)
-}
-
-fn convert_edge(
-    file: &p21::P21File,
-    table: &Table,
-    id: u64,
-    holder: &EdgeCurveHolder,
-    uncertainty: Option<f64>,
-) -> Result<(TrimEdge, bool), String> {
-    // truck-stepio follows a SURFACE_CURVE's preferred representation, which may be a
-    // parameter-space curve (its parameters need not match truck's surface, and it only
-    // approximates the edge); the 3D curve of a SURFACE_CURVE / SEAM_CURVE is exact: use it.
-    let curve_3d = holder_ref(&holder.edge_geometry)
-        .and_then(|g| file.get(g))
-        .and_then(p21::Entity::record)
-        .filter(|r| r.name == "SURFACE_CURVE" || r.name == "SEAM_CURVE")
-        .and_then(|r| r.ref_at(1));
-    let ec = match holder.clone().into_owned(table) {
-        Ok(ec) => ec,
-        // A SURFACE_CURVE with a pcurve truck cannot read (on a surface it lacks): the edge is
-        // its 3D curve.
-        Err(e) => match curve_3d {
-            Some(c3d) => {
-                let mut h = holder.clone();
-                h.edge_geometry = PlaceHolder::Ref(Name::Entity(c3d));
-                h.into_owned(table)
-                    .map_err(|_| format!("edge #{id}: {e}"))?
-            }
-            None => return Err(format!("edge #{id}: {e}")),
-        },
-    };
-    let start = to_dvec(Point3::from(&ec.edge_start.vertex_geometry));
-    let end = to_dvec(Point3::from(&ec.edge_end.vertex_geometry));
-    // Closed when it starts and ends at one VERTEX_POINT (as a kernel decides), or at one
-    // position: two vertices a hair apart bound a tiny edge, not a whole circle.
-    let closed = match (holder_ref(&holder.edge_start), holder_ref(&holder.edge_end)) {
-        (Some(a), Some(b)) => a == b || start == end,
-        _ => start == end,
-    };
-    let size = start.length().max(end.length()).max(start.distance(end));
-    let tol = EDGE_VERTEX_TOLERANCE * (1.0 + size);
-    // What a kernel accepts (OCCT raises a vertex's tolerance until it covers its edges): the
-    // file's own uncertainty, generously, or a small fraction of the edge.
-    let loose_tol = (LOOSE_UNCERTAINTY_FACTOR * uncertainty.unwrap_or(0.0))
-        .max(LOOSE_EDGE_FRACTION * start.distance(end).max(tol));
-    let exact = curve_3d.and_then(|c3d| {
-        let geometry = PlaceHolder::<CurveAnyHolder>::Ref(Name::Entity(c3d))
-            .into_owned(table)
-            .ok()?;
-        EdgeCurve {
-            edge_geometry: geometry,
-            ..ec.clone()
-        }
-        .parse_curve3d()
-        .ok()
-    });
-    let truck_curve = ec
-        .parse_curve3d()
-        .map_err(|e| format!("edge #{id}: curve not supported: {e}"));
-    for t in [tol, loose_tol] {
-        if let Some(curve) = exact.clone()
-            && let Some(e) = TrimEdge::new(id, curve, start, end, closed, t)
-        {
-            return Ok((e, t > tol));
-        }
-        if let Ok(curve) = truck_curve.clone()
-            && let Some(e) = TrimEdge::new(id, curve, start, end, closed, t)
-        {
-            return Ok((e, t > tol));
-        }
-    }
-    truck_curve?;
-    Err(format!(
-        "edge #{id}: its vertices are not on its curve (farther than the file's tolerance, \
-         {loose_tol:e})"
-    ))
 }
 
 fn holder_ref<T>(p: &PlaceHolder<T>) -> Option<u64> {
