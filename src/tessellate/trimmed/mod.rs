@@ -496,7 +496,11 @@ impl TrimmedTessellator {
                     continue;
                 }
                 let hint = pts.last().map(|b| b.uv);
-                let far = eps.max(1e-3 * face.bounds.radius);
+                // Loop points lie on the surface (within the model's gaps), whatever ε: a
+                // nearest point farther than this is on another sheet (a thread's next turn,
+                // 1.66 off at ε 1.66 on generated model gen-1-85: the loop then ran over
+                // three turns and half the face was drawn outside its trim).
+                let far = 1e-3 * face.bounds.radius;
                 let uv = s.project_along(p, hint, far, fine_left);
                 let Some(mut uv) = uv else {
                     return Err(TrimError::Projection { edge: e.id });
