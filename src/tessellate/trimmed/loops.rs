@@ -323,15 +323,7 @@ pub(super) fn refine_border(
             continue;
         }
         budget -= 1;
-        // Split on the curve when both ends come from the same edge, else on the surface.
-        let on_curve = match (a.src, b.src) {
-            (Some((la, ea, ta)), Some((lb, eb, tb))) if (la, ea) == (lb, eb) && ta != tb => face
-                .loops
-                .get(la as usize)
-                .and_then(|l| l.get(ea as usize))
-                .map(|le| (le, la, ea, 0.5 * (ta + tb))),
-            _ => None,
-        };
+        let on_curve = curve_between(face, a, b);
         let m = match on_curve {
             Some((le, la, ea, t)) => {
                 let p = le.edge.point(t);
@@ -355,4 +347,51 @@ pub(super) fn refine_border(
         };
         lp.insert(k + 1, m);
     }
+}
+
+/// Where to split the border segment `a`–`b` on a trim curve: the edge and the parameter
+/// halfway between the two ends on it, when both lie on one edge. The point at a vertex two
+/// edges share carries the first edge's parameter only (the second's first point is dropped
+/// as its repeat), so a segment from a vertex to the next edge's first sample, or from an
+/// edge's last sample to the vertex it ends at, lies on that edge too. `None` for a closing
+/// line (split on the surface). Without the vertex rule the stretch of a hyperbola from a
+/// wide cone's base circle to its first sample was split on the surface, a straight line in
+/// (u, v) 3 mm off the hyperbola: the face was drawn outside its trim (generated model
+/// gen-1-42, 11 T from Open CASCADE).
+fn curve_between(face: &TrimmedFace, a: BPoint, b: BPoint) -> Option<(&LoopEdge, u32, u32, f64)> {
+    let edge = |l: u32, e: u32| face.loops.get(l as usize)?.get(e as usize);
+    let at = |p: DVec3, q: DVec3| p.distance(q) <= 1e-9 * (1.0 + p.length());
+    // An edge's first and last point in the loop's direction, with their parameters.
+    let first = |le: &LoopEdge| match le.forward {
+        true => (le.edge.start, le.edge.t0),
+        false => (le.edge.end, le.edge.t1),
+    };
+    let last = |le: &LoopEdge| match le.forward {
+        true => (le.edge.end, le.edge.t1),
+        false => (le.edge.start, le.edge.t0),
+    };
+    let (sa, sb) = (a.src?, b.src?);
+    let (la, ea, ta) = sa;
+    let (lb, eb, tb) = sb;
+    let (le, l, e, t0, t1) = if (la, ea) == (lb, eb) {
+        let le = edge(la, ea)?;
+        // A closed edge alone in its loop: the segment closing it ends at its last parameter
+        // (the first point stands for both ends).
+        let tb = match tb == first(le).1 && ta != tb && at(last(le).0, b.p) {
+            true => last(le).1,
+            false => tb,
+        };
+        (le, la, ea, ta, tb)
+    } else if let Some(le) = edge(lb, eb)
+        && at(first(le).0, a.p)
+    {
+        (le, lb, eb, first(le).1, tb)
+    } else if let Some(le) = edge(la, ea)
+        && at(last(le).0, b.p)
+    {
+        (le, la, ea, ta, last(le).1)
+    } else {
+        return None;
+    };
+    (t0 != t1).then_some((le, l, e, 0.5 * (t0 + t1)))
 }
