@@ -120,9 +120,12 @@ impl Boundary {
                 continue;
             }
             let mut out: Vec<(DVec3, DVec2, bool)> = Vec::with_capacity(pts.len() + 1);
-            let mut prev: Option<DVec2> = None;
             let far = 1e-3 * face.bounds.radius;
             let mut fine_left = true;
+            // The first point (a vertex) is projected near the second (inside its edge): on a
+            // closed surface extended past its seam, a vertex at the seam is nearest to the
+            // extension as well (generated model gen-7-6).
+            let mut prev: Option<DVec2> = face.project_along(pts[1].0, None, far, &mut fine_left);
             for &(p, seam) in &pts {
                 let Some(mut uv) = face.project_along(p, prev, far, &mut fine_left) else {
                     continue;
@@ -277,6 +280,27 @@ impl Boundary {
             }
         }
         best
+    }
+
+    /// The parameter of the boundary point nearest to `p` in 3D (along the nearest segment),
+    /// or `None` without boundary segments.
+    pub(super) fn nearest_uv(&self, p: DVec3) -> Option<DVec2> {
+        let mut best: Option<(f64, DVec2)> = None;
+        for lp in &self.loops {
+            for w in lp.windows(2).filter(|w| !w[0].2) {
+                let (a, b) = (w[0].0, w[1].0);
+                let ab = b - a;
+                let t = match ab.length_squared() {
+                    l if l > 0.0 => ((p - a).dot(ab) / l).clamp(0.0, 1.0),
+                    _ => 0.0,
+                };
+                let d = p.distance(a + ab * t);
+                if best.is_none_or(|(bd, _)| d < bd) {
+                    best = Some((d, w[0].1.lerp(w[1].1, t)));
+                }
+            }
+        }
+        best.map(|(_, uv)| uv)
     }
 
     /// Whether `uv` lies on the face's side of the nearest boundary segment.

@@ -286,11 +286,28 @@ pub fn measure(
                     out.surface_error = out.surface_error.max(d);
                     d
                 } else {
+                    // A surface that covers itself (one extended past its seam) has a second
+                    // foot point inside the trim: searched from the nearest boundary point.
+                    // Any point of the face bounds the distance to it, so this only lowers
+                    // the error to a true one.
+                    let inner = boundary
+                        .nearest_uv(p)
+                        .and_then(|h| face.project(p, Some(h)))
+                        .filter(|uv| boundary.inside(face, boundary.on_sheet(face, *uv)))
+                        .map(|uv| off(&uv));
                     let db = boundary.distance_3d(p).min(f64::MAX);
-                    if db > eps {
-                        out.outside += 1;
+                    match inner {
+                        Some(di) if di <= db.min(eps) => {
+                            out.surface_error = out.surface_error.max(di);
+                            di
+                        }
+                        _ => {
+                            if db > eps {
+                                out.outside += 1;
+                            }
+                            db
+                        }
                     }
-                    db
                 };
                 record(&mut out, err, p);
             }

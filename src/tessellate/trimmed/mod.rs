@@ -495,12 +495,24 @@ impl TrimmedTessellator {
                 {
                     continue;
                 }
-                let hint = pts.last().map(|b| b.uv);
+                let far = 1e-3 * face.bounds.radius;
+                // The loop's first point is projected from an interior point of its edge: a
+                // vertex on the seam of a closed surface lies on both sides of it, and where
+                // the surface is extended past its seam (a lofted side that a fillet grew, by
+                // 5.4 of 70 in u on generated model gen-7-6) the nearest side was the
+                // extension: the whole loop then followed it, up to 24 off the face.
+                let hint = match pts.last() {
+                    Some(b) => Some(b.uv),
+                    None if ordered.len() >= 2 => {
+                        let q = e.point(0.5 * (ordered[0] + ordered[1]));
+                        s.project_along(q, None, far, fine_left)
+                    }
+                    None => None,
+                };
                 // Loop points lie on the surface (within the model's gaps), whatever ε: a
                 // nearest point farther than this is on another sheet (a thread's next turn,
                 // 1.66 off at ε 1.66 on generated model gen-1-85: the loop then ran over
                 // three turns and half the face was drawn outside its trim).
-                let far = 1e-3 * face.bounds.radius;
                 let uv = s.project_along(p, hint, far, fine_left);
                 let Some(mut uv) = uv else {
                     return Err(TrimError::Projection { edge: e.id });
