@@ -1321,3 +1321,96 @@ fn a_thread_face_at_a_coarse_tolerance_stays_on_its_own_turn() {
         );
     }
 }
+
+/// A wide cone (semi-angle 86.2°, r 31.3 at its base) cut by a plane along a hyperbola
+/// (face #35 of generated model gen-1-42, `tests/data/step/wide_cone_hyperbola_trim.step`).
+/// The loop point at the vertex the base circle and the hyperbola share carries the circle's
+/// parameter, so the stretch of the hyperbola up to its first sample was refined on the
+/// surface (a straight line in (u, v)) instead of on the curve: the mesh ran up to 2.8 mm
+/// past the cutting plane (OCCT judge 10.98 T). Judged by the plane's own equation (PLANE
+/// #211 of the file: the face lies on its negative side), no code shared, and by the measure.
+#[test]
+fn a_cone_cut_along_a_hyperbola_stays_on_its_side_of_the_cut() {
+    use patchwork::check::fidelity::measure_meshes;
+    let path = common::root().join("tests/data/step/wide_cone_hyperbola_trim.step");
+    let scene = load(&path).expect("loads");
+    assert!(scene.skipped.is_empty(), "{:?}", scene.skipped);
+    assert_eq!(scene.patches.len(), 1);
+    let origin = glam::DVec3::new(-22.9253871207, -4.267602307644, 4.066401393943);
+    let normal = glam::DVec3::new(-0.293127604391, -0.882333555583, 0.36818976661);
+    for tol in [0.259, 0.114, 1.14] {
+        let meshes = tessellate_scene_tolerance(&scene, tol);
+        let m = &meshes[0];
+        assert!(m.failure.is_none(), "{:?}", m.failure);
+        let past = m
+            .positions
+            .iter()
+            .map(|p| (p.as_dvec3() - origin).dot(normal))
+            .fold(f64::MIN, f64::max);
+        assert!(
+            past <= 1e-4,
+            "tol {tol}: a vertex {past} past the cutting plane"
+        );
+        let faces = measure_meshes(&scene, &meshes);
+        let (_, f) = faces.first().expect("one trimmed face");
+        assert!(
+            f.ratio() <= 1.1 && f.outside == 0,
+            "tol {tol}: error/tol {} (outside {})",
+            f.ratio(),
+            f.outside
+        );
+    }
+}
+
+/// A ruled loft's side fused with a torus and filleted (face #35 of generated model gen-7-6,
+/// part 0; `tests/data/step/loft_extended_past_seam.step.gz`): the fillet grew its B-spline
+/// surface past the seam (u −5.38..75.72, the seam at 0 and 70.34), so near the seam the
+/// surface covers itself. The loop's first vertex, on the seam, was projected onto the
+/// extension and the loop followed it (up to 24 mm off the face; OCCT judge 18 T, `stats`
+/// 136 ε). Judged by Open CASCADE's area and box of the face, no code shared, and by the
+/// measure, which must not raise a false alarm where the sheets overlap.
+#[test]
+fn a_surface_extended_past_its_seam_is_trimmed_on_the_sheet_of_its_loop() {
+    use patchwork::check::fidelity::measure_meshes;
+    let path = common::root().join("tests/data/step/loft_extended_past_seam.step.gz");
+    let scene = load(&path).expect("loads");
+    assert!(scene.skipped.is_empty(), "{:?}", scene.skipped);
+    assert_eq!(scene.patches.len(), 1);
+    let occt_area = 560.99f32;
+    for tol in [0.16, 0.048, 0.8] {
+        let meshes = tessellate_scene_tolerance(&scene, tol);
+        let m = &meshes[0];
+        assert!(m.failure.is_none(), "{:?}", m.failure);
+        let area: f32 = m
+            .triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| m.positions[i as usize]);
+                0.5 * (b - a).cross(c - a).length()
+            })
+            .sum();
+        assert!(
+            (area - occt_area).abs() < 0.01 * occt_area,
+            "tol {tol}: area {area}, Open CASCADE's {occt_area}"
+        );
+        // Open CASCADE's exact box of the face (`BRepBndLib::AddOptimal`).
+        let (lo, hi) = (
+            glam::Vec3::new(-14.3711, -14.1234, -3.9498),
+            glam::Vec3::new(9.9110, 10.1901, 13.4920),
+        );
+        for p in &m.positions {
+            assert!(
+                p.cmpge(lo - tol as f32).all() && p.cmple(hi + tol as f32).all(),
+                "tol {tol}: vertex {p} outside the face's box {lo} .. {hi}"
+            );
+        }
+        let faces = measure_meshes(&scene, &meshes);
+        let (_, f) = faces.first().expect("one trimmed face");
+        assert!(
+            f.ratio() <= 1.1 && f.outside == 0,
+            "tol {tol}: error/tol {} (outside {})",
+            f.ratio(),
+            f.outside
+        );
+    }
+}
