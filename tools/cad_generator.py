@@ -688,10 +688,12 @@ def build_part(p, dropped, tag, kept):
     return shape
 
 
-def build_step(rec, path):
+def build_step(rec, path, built_brep=None):
     """Build the recipe with OCCT and write it as STEP (XCAF assembly, names, the recipe's unit
     and schema). Returns {"dropped": [...], "parts": n, "leaves": n, "faces": n (placed),
-    "kept": {part: [indices of the operations performed]}}."""
+    "kept": {part: [indices of the operations performed]}}. With `built_brep`, the parts as
+    built (OCCT's own format, before any STEP round trip) are also written there, one compound
+    of one part each in the order of `"built_parts"` (their names) in the result."""
     from OCP.IFSelect import IFSelect_RetDone
     from OCP.Interface import Interface_Static
     from OCP.STEPCAFControl import STEPCAFControl_Writer
@@ -763,7 +765,20 @@ def build_step(rec, path):
     if w.Write(tmp) != IFSelect_RetDone:
         raise Dropped("STEP write failed")
     os.replace(tmp, path)
-    return {"dropped": dropped, "parts": len(shapes), "leaves": _leaf_count(rec["tree"]), "faces": nfaces[0], "kept": kept}
+    out = {"dropped": dropped, "parts": len(shapes), "leaves": _leaf_count(rec["tree"]), "faces": nfaces[0], "kept": kept}
+    if built_brep:
+        from OCP.BRep import BRep_Builder
+        from OCP.BRepTools import BRepTools
+        from OCP.TopoDS import TopoDS_Compound
+
+        b, c = BRep_Builder(), TopoDS_Compound()
+        b.MakeCompound(c)
+        for i in sorted(shapes):
+            b.Add(c, shapes[i])
+        if not BRepTools.Write_s(c, built_brep):
+            raise Dropped("BRep write failed")
+        out["built_parts"] = ["part %d" % i for i in sorted(shapes)]
+    return out
 
 
 def _quiet():

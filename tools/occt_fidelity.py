@@ -18,7 +18,11 @@ shape walked through its components with XCAFDoc_ShapeTool.GetLocation_s to the
 leaves; a leaf part contributes one placed instance per solid, per shell outside a
 solid and one for faces outside any shell (compounds are expanded). Each part is
 meshed once with BRepMesh_IncrementalMesh(shape, T/10, False, 0.5, True) and its
-triangles are placed by the instance's world location.
+triangles are placed by the instance's world location. A generated model's parts are judged
+as OCCT built them (cad_generator.build_step writes them beside the STEP in OCCT's own
+format), not as OCCT reads back the STEP it wrote: the round trip can change a face (seed 7
+model 6: a sphere's face read back with its hole covered twice); where the two differ the
+report says so ("judged as built").
 
 Checks (a file fails if any does):
   (c) assembly: the number of placed instances is the same, and pairing them by
@@ -248,7 +252,12 @@ class Occt:
     """One STEP file read through XCAF: prototypes (one per leaf part label) and placed
     instances (prototype index, sub-shape index, world 4x4, name)."""
 
-    def __init__(self, path):
+    def __init__(self, path, built=None):
+        """`built`: {part name: shape} of a generated model as OCCT built it; those parts are
+        judged as built instead of as OCCT reads them back from the STEP it wrote (the round
+        trip can change a face: seed 7 model 6, a sphere fused with a loft, read back with the
+        hole in its face covered twice, 7 088 mm² of a 6 856 mm² sphere), and where the two
+        differ `roundtrip` says so."""
         from OCP.IFSelect import IFSelect_RetDone
         from OCP.Interface import Interface_Static
         from OCP.STEPCAFControl import STEPCAFControl_Reader
@@ -276,6 +285,8 @@ class Occt:
         self.proto_of = {}
         self.instances = []  # dict(proto, sub, M (4x4), name)
         self.placements = 0  # placed leaf parts (an instance is a solid/shell of one)
+        self.built = built or {}
+        self.roundtrip = []  # parts whose read-back differs from the model built
         from OCP.OCP.collections import Sequence_TDF_Label
 
         free = Sequence_TDF_Label()
@@ -318,6 +329,9 @@ class Occt:
         key = self._entry(label)
         if key not in self.proto_of:
             shape = S.GetShape_s(label)
+            name = self._name(label) or key
+            if name in self.built:
+                shape = self._as_built(name, shape, self.built[name])
             self.proto_of[key] = len(self.protos)
             self.protos.append({"name": self._name(label) or key, "shape": shape, "subs": self._leaves(shape)})
         p = self.proto_of[key]
@@ -325,6 +339,35 @@ class Occt:
         M = _loc_matrix(loc)
         for k in range(len(self.protos[p]["subs"])):
             self.instances.append({"proto": p, "sub": k, "M": M, "name": self.protos[p]["name"]})
+
+    def _as_built(self, name, read, built):
+        """The part as built, noting in `roundtrip` where the read-back differs from it (its
+        area or its box by more than 0.1 % of the box's diagonal)."""
+        from OCP.BRepGProp import BRepGProp
+        from OCP.GProp import GProp_GProps
+
+        def area(sh):
+            g = GProp_GProps()
+            BRepGProp.SurfaceProperties_s(sh, g)
+            return g.Mass()
+
+        def box(sh):
+            from OCP.Bnd import Bnd_Box
+            from OCP.BRepBndLib import BRepBndLib
+
+            b = Bnd_Box()
+            BRepBndLib.AddOptimal_s(sh, b, False, False)
+            if b.IsVoid():
+                return np.zeros(6)
+            return np.array(b.CornerMin().Coord() + b.CornerMax().Coord())
+
+        a0, a1 = area(built), area(read)
+        b0, b1 = box(built), box(read)
+        diag = float(np.linalg.norm(b0[3:] - b0[:3]))
+        if abs(a0 - a1) > 1e-3 * max(a0, 1e-12) or float(np.abs(b0 - b1).max()) > 1e-3 * diag:
+            self.roundtrip.append("%s: built %.6g mm² (box %s), read back from the STEP %.6g mm² (box %s)" % (
+                name, a0, np.round(b0, 3).tolist(), a1, np.round(b1, 3).tolist()))
+        return built
 
     @staticmethod
     def _leaves(shape):
@@ -906,7 +949,25 @@ def evaluate(occt, ours, rel, T, diag, occt_fine, rng, max_samples, per_tri):
     return res
 
 
-def run_file(path, rels, pw, max_samples, workdir, seed):
+def read_built(brep, names):
+    """The parts of a generated model as built (cad_generator.build_step's `built_brep`)."""
+    from OCP.BRep import BRep_Builder
+    from OCP.BRepTools import BRepTools
+    from OCP.TopoDS import TopoDS_Iterator, TopoDS_Shape
+
+    c = TopoDS_Shape()
+    if not BRepTools.Read_s(c, brep, BRep_Builder()):
+        raise RuntimeError("could not read " + brep)
+    parts, it = [], TopoDS_Iterator(c)
+    while it.More():
+        parts.append(it.Value())
+        it.Next()
+    if len(parts) != len(names):
+        raise RuntimeError("%s holds %d parts, %d named" % (brep, len(parts), len(names)))
+    return dict(zip(names, parts))
+
+
+def run_file(path, rels, pw, max_samples, workdir, seed, built=None):
     t0 = time.time()
     rows = []
     plain = path
@@ -915,7 +976,7 @@ def run_file(path, rels, pw, max_samples, workdir, seed):
         with gzip.open(path, "rb") as fi, open(plain, "wb") as fo:
             shutil.copyfileobj(fi, fo)
     try:
-        occt = OcctIges(plain) if is_iges(path) else Occt(plain)
+        occt = OcctIges(plain) if is_iges(path) else Occt(plain, built)
     except Exception as e:  # noqa: BLE001
         return [{"file": path, "rel": r, "fail": ["OCCT: %s" % e], "time": time.time() - t0} for r in rels]
     lo, hi = occt.bbox()
@@ -946,6 +1007,8 @@ def run_file(path, rels, pw, max_samples, workdir, seed):
             per_tri = 4 if nt < 20000 else (1 if nt < 200000 else 0)
             res = dict(base, **evaluate(occt, ours, rel, T, diag, fine, rng, max_samples, per_tri))
         res["placements_occt"] = occt.placements
+        if getattr(occt, "roundtrip", None):
+            res["roundtrip"] = occt.roundtrip
         res["time"] = time.time() - t1 + (t_read if rel == rels[0] else 0.0)
         rows.append(res)
     return rows
@@ -983,6 +1046,8 @@ def print_table(rows):
                 log("    worst b: %.2f T  %s" % (r["b_over_T"], r["b_where"]))
             if r.get("fail_note"):
                 log("    note: " + r["fail_note"])
+            for n in r.get("roundtrip", []):
+                log("    judged as built; OCCT's reading of its STEP differs: " + n)
             for f in r.get("fail", []):
                 log("    FAIL " + f)
             for f in r.get("a_faces", []):
@@ -1122,7 +1187,7 @@ def build_isolated(gen, rec, step):
 
     def child():
         try:
-            r = ("ok", gen.build_step(rec, step))
+            r = ("ok", gen.build_step(rec, step, step + ".brep"))
         except gen.Dropped as e:
             r = ("dropped", str(e))
         except BaseException as e:  # noqa: BLE001 - reported to the parent as it is
@@ -1162,7 +1227,8 @@ def judge_generated(args):
     def judge(rec, name):
         step = os.path.join(work, name + ".step")
         info = build_isolated(gen, rec, step)
-        return info, run_file(step, rels, args.patchwork, args.max_samples, work, args.seed)
+        built = read_built(step + ".brep", info["built_parts"])
+        return info, run_file(step, rels, args.patchwork, args.max_samples, work, args.seed, built)
 
     try:
         for i in range(args.gen_start, args.gen_start + args.generate):
