@@ -21,6 +21,46 @@ const CLOSED: [&str; 5] = [
     "screw.step",
 ];
 
+/// A file of one face: loaded, nothing skipped.
+fn one_face(name: &str) -> Scene {
+    let path = common::root().join("tests/data/step").join(name);
+    let scene = load(&path).expect("loads");
+    assert!(scene.skipped.is_empty(), "{:?}", scene.skipped);
+    assert_eq!(scene.patches.len(), 1);
+    scene
+}
+
+/// A mesh's area and box.
+fn area_and_box(m: &patchwork::tessellate::PatchMesh) -> (f32, glam::Vec3, glam::Vec3) {
+    let (lo, hi) = m.positions.iter().fold(
+        (glam::Vec3::splat(f32::MAX), glam::Vec3::splat(f32::MIN)),
+        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+    );
+    let area = m
+        .triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| m.positions[i as usize]);
+            0.5 * (b - a).cross(c - a).length()
+        })
+        .sum();
+    (area, lo, hi)
+}
+
+/// The independent measure (`check::fidelity`) holds the one face within 1.1 tol, nothing
+/// drawn outside its trim.
+fn assert_measured_within(scene: &Scene, meshes: &[patchwork::tessellate::PatchMesh], tol: f64) {
+    let faces = patchwork::check::fidelity::measure_meshes(scene, meshes);
+    let (_, f) = faces.first().expect("one trimmed face");
+    assert!(
+        f.ratio() <= 1.1 && f.outside == 0,
+        "tol {tol}: error/tol {} (outside {}, missing {})",
+        f.ratio(),
+        f.outside,
+        f.missing
+    );
+}
+
 fn parse(text: &str) -> Result<Scene, LoadError> {
     patchwork::prep::step::parse(text.as_bytes(), Path::new("test.step"))
 }
@@ -1270,28 +1310,7 @@ fn a_sphere_with_a_vertex_loop_and_a_hole_is_drawn_whole_but_the_hole() {
 /// and extent of a fine mesh (the defect drew turns the face does not have).
 #[test]
 fn a_thread_face_at_a_coarse_tolerance_stays_on_its_own_turn() {
-    use patchwork::check::fidelity::measure_meshes;
-    let path = common::root().join("tests/data/step/thread_face_coarse.step.gz");
-    let scene = load(&path).expect("loads");
-    assert!(scene.skipped.is_empty(), "{:?}", scene.skipped);
-    assert_eq!(scene.patches.len(), 1);
-    let area_and_box = |m: &patchwork::tessellate::PatchMesh| {
-        let mut lo = glam::Vec3::splat(f32::MAX);
-        let mut hi = glam::Vec3::splat(f32::MIN);
-        for p in &m.positions {
-            lo = lo.min(*p);
-            hi = hi.max(*p);
-        }
-        let area: f32 = m
-            .triangles
-            .iter()
-            .map(|t| {
-                let [a, b, c] = t.map(|i| m.positions[i as usize]);
-                0.5 * (b - a).cross(c - a).length()
-            })
-            .sum();
-        (area, lo, hi)
-    };
+    let scene = one_face("thread_face_coarse.step.gz");
     let fine = tessellate_scene_tolerance(&scene, 0.005);
     let (fine_area, fine_lo, fine_hi) = area_and_box(&fine[0]);
     for tol in [1.66, 0.9, 0.475] {
@@ -1310,15 +1329,7 @@ fn a_thread_face_at_a_coarse_tolerance_stays_on_its_own_turn() {
             grown <= tol as f32,
             "tol {tol}: extent {lo} .. {hi}, the fine mesh's {fine_lo} .. {fine_hi}"
         );
-        let faces = measure_meshes(&scene, &meshes);
-        let (_, f) = faces.first().expect("one trimmed face");
-        assert!(
-            f.ratio() <= 1.1 && f.outside == 0,
-            "tol {tol}: error/tol {} (outside {}, missing {})",
-            f.ratio(),
-            f.outside,
-            f.missing
-        );
+        assert_measured_within(&scene, &meshes, tol);
     }
 }
 
@@ -1331,11 +1342,7 @@ fn a_thread_face_at_a_coarse_tolerance_stays_on_its_own_turn() {
 /// #211 of the file: the face lies on its negative side), no code shared, and by the measure.
 #[test]
 fn a_cone_cut_along_a_hyperbola_stays_on_its_side_of_the_cut() {
-    use patchwork::check::fidelity::measure_meshes;
-    let path = common::root().join("tests/data/step/wide_cone_hyperbola_trim.step");
-    let scene = load(&path).expect("loads");
-    assert!(scene.skipped.is_empty(), "{:?}", scene.skipped);
-    assert_eq!(scene.patches.len(), 1);
+    let scene = one_face("wide_cone_hyperbola_trim.step");
     let origin = glam::DVec3::new(-22.9253871207, -4.267602307644, 4.066401393943);
     let normal = glam::DVec3::new(-0.293127604391, -0.882333555583, 0.36818976661);
     for tol in [0.259, 0.114, 1.14] {
@@ -1351,14 +1358,7 @@ fn a_cone_cut_along_a_hyperbola_stays_on_its_side_of_the_cut() {
             past <= 1e-4,
             "tol {tol}: a vertex {past} past the cutting plane"
         );
-        let faces = measure_meshes(&scene, &meshes);
-        let (_, f) = faces.first().expect("one trimmed face");
-        assert!(
-            f.ratio() <= 1.1 && f.outside == 0,
-            "tol {tol}: error/tol {} (outside {})",
-            f.ratio(),
-            f.outside
-        );
+        assert_measured_within(&scene, &meshes, tol);
     }
 }
 
@@ -1371,46 +1371,27 @@ fn a_cone_cut_along_a_hyperbola_stays_on_its_side_of_the_cut() {
 /// measure, which must not raise a false alarm where the sheets overlap.
 #[test]
 fn a_surface_extended_past_its_seam_is_trimmed_on_the_sheet_of_its_loop() {
-    use patchwork::check::fidelity::measure_meshes;
-    let path = common::root().join("tests/data/step/loft_extended_past_seam.step.gz");
-    let scene = load(&path).expect("loads");
-    assert!(scene.skipped.is_empty(), "{:?}", scene.skipped);
-    assert_eq!(scene.patches.len(), 1);
+    let scene = one_face("loft_extended_past_seam.step.gz");
     let occt_area = 560.99f32;
+    // Open CASCADE's exact box of the face (`BRepBndLib::AddOptimal`).
+    let (box_lo, box_hi) = (
+        glam::Vec3::new(-14.3711, -14.1234, -3.9498),
+        glam::Vec3::new(9.9110, 10.1901, 13.4920),
+    );
     for tol in [0.16, 0.048, 0.8] {
         let meshes = tessellate_scene_tolerance(&scene, tol);
         let m = &meshes[0];
         assert!(m.failure.is_none(), "{:?}", m.failure);
-        let area: f32 = m
-            .triangles
-            .iter()
-            .map(|t| {
-                let [a, b, c] = t.map(|i| m.positions[i as usize]);
-                0.5 * (b - a).cross(c - a).length()
-            })
-            .sum();
+        let (area, lo, hi) = area_and_box(m);
         assert!(
             (area - occt_area).abs() < 0.01 * occt_area,
             "tol {tol}: area {area}, Open CASCADE's {occt_area}"
         );
-        // Open CASCADE's exact box of the face (`BRepBndLib::AddOptimal`).
-        let (lo, hi) = (
-            glam::Vec3::new(-14.3711, -14.1234, -3.9498),
-            glam::Vec3::new(9.9110, 10.1901, 13.4920),
-        );
-        for p in &m.positions {
-            assert!(
-                p.cmpge(lo - tol as f32).all() && p.cmple(hi + tol as f32).all(),
-                "tol {tol}: vertex {p} outside the face's box {lo} .. {hi}"
-            );
-        }
-        let faces = measure_meshes(&scene, &meshes);
-        let (_, f) = faces.first().expect("one trimmed face");
+        let t = tol as f32;
         assert!(
-            f.ratio() <= 1.1 && f.outside == 0,
-            "tol {tol}: error/tol {} (outside {})",
-            f.ratio(),
-            f.outside
+            lo.cmpge(box_lo - t).all() && hi.cmple(box_hi + t).all(),
+            "tol {tol}: the mesh spans {lo} .. {hi}, the face {box_lo} .. {box_hi}"
         );
+        assert_measured_within(&scene, &meshes, tol);
     }
 }
