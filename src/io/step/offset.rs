@@ -17,8 +17,13 @@
 //! [`resolve`] returns the basis and the distance), and evaluated as the offset by
 //! `model::nurbs::FastSurface::Offset` (`OffsetOfTruck` for swept bases).
 //!
+//! A `RECTANGULAR_TRIMMED_SURFACE` basis only restricts its own basis' parameters (the face's
+//! loops bound the face anyway): the offset is read as that basis' offset, unless one of its
+//! two parameter senses is reversed (its normal, and so the offset's side, turned).
+//!
 //! Not yet read, with the reason given and their faces skipped naming it: offsets of other
-//! bases, and offsets crossing their basis's axis, centre or apex.
+//! bases, of a trimmed surface with one sense reversed, and offsets crossing their basis's
+//! axis, centre or apex.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -112,6 +117,29 @@ fn replacement(
             .ok_or("no finite distance")?;
         d += dist;
         basis = r.ref_at(1).ok_or("no basis surface reference")?;
+    }
+    // A RECTANGULAR_TRIMMED_SURFACE only restricts its basis' parameters (the face's loops
+    // bound it anyway): the offset is the basis' offset, when the normal keeps its sense (both
+    // parameter senses kept or both reversed).
+    if let Some(r) = file
+        .get(basis)
+        .and_then(|e| e.part("RECTANGULAR_TRIMMED_SURFACE"))
+    {
+        let sense = |i: usize| match r.arg(i) {
+            Some(super::p21::Param::Enum(v)) => Some(v == "T"),
+            _ => None,
+        };
+        match (sense(6), sense(7)) {
+            (Some(a), Some(b)) if a == b => {
+                basis = r.ref_at(1).ok_or("no basis surface reference")?;
+            }
+            _ => {
+                return Err(format!(
+                    "basis #{basis}: a RECTANGULAR_TRIMMED_SURFACE with one parameter reversed \
+                     (its normal turned) is not read yet"
+                ));
+            }
+        }
     }
     let entity = file
         .get(basis)
