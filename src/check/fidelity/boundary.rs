@@ -170,7 +170,11 @@ impl Boundary {
             .count();
         // Even-odd needs a ray that leaves the domain: along a direction that is not periodic,
         // and an even number of loops running around the periodic one.
-        let wraps = wrapping % 2 == 1 || (periods.0.is_some() && periods.1.is_some());
+        // On a surface periodic both ways (a torus) even-odd is meaningful when no loop runs
+        // around it: within a period of the loops' middle, a loop closed in (u, v) is a
+        // polygon of the plane (a fillet ring bounded by its seam twice and two circles).
+        let wraps =
+            wrapping % 2 == 1 || (periods.0.is_some() && periods.1.is_some() && wrapping > 0);
 
         Boundary {
             loops,
@@ -218,10 +222,25 @@ impl Boundary {
     }
 
     /// Even-odd over the loops (meaningful when no loop runs around the surface).
-    pub(super) fn inside_by_parity(&self, uv: DVec2) -> bool {
+    pub(super) fn inside_by_parity(&self, mut uv: DVec2) -> bool {
         // The ray runs along `r`, crossings are found on `c` (taken modulo its period, if any).
         let (pu, pv) = self.periods;
         let (c, r, period) = if pu.is_some() { (0, 1, pu) } else { (1, 0, pv) };
+        // Periodic along the ray too: the sample within half a period of the loops' middle.
+        let ray_period = if r == 1 { pv } else { pu };
+        if let Some(p) = ray_period.filter(|p| *p > 0.0) {
+            let (lo, hi) = self
+                .loops
+                .iter()
+                .flatten()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), q| {
+                    (lo.min(q.1[r]), hi.max(q.1[r]))
+                });
+            if lo.is_finite() && hi.is_finite() {
+                let mid = 0.5 * (lo + hi);
+                uv[r] -= ((uv[r] - mid) / p).round() * p;
+            }
+        }
         let mut odd = false;
         for lp in &self.loops {
             for w in lp.windows(2) {
