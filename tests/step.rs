@@ -1418,3 +1418,31 @@ fn an_offset_of_a_trimmed_surface_is_the_offset_of_its_basis() {
         assert_measured_within(&scene, &meshes, tol);
     }
 }
+
+/// A torus fillet ring (R 10.3, r 3.142, v from 0.012 to π/2: face #212 of generated model
+/// gen-1-104; `tests/data/step/torus_ring_seam_twice.step`) bounded by one loop: its seam
+/// twice and two circles, closed in (u, v). The measure, by the side of the nearest boundary
+/// alone on a surface periodic both ways, called nearly every sample outside (`stats` 18 ε
+/// where the OCCT judge passes at the same tolerance), and by even-odd it missed the samples
+/// on the seam (u = −1e-17 rounded to 2π against one segment, not against the other). Judged
+/// by the band's own area, 2πr·(R(π/2 − v₀) + r(1 − sin v₀)), no code shared, and by the
+/// measure: no false alarm.
+#[test]
+fn a_torus_ring_bounded_by_its_seam_twice_is_measured_inside() {
+    let scene = one_face("torus_ring_seam_twice.step");
+    let (big, r, v0) = (10.303705913099f64, 3.142f64, 0.012072904217175f64);
+    let band = std::f64::consts::TAU
+        * r
+        * (big * (std::f64::consts::FRAC_PI_2 - v0) + r * (1.0 - v0.sin()));
+    for tol in [0.07, 0.02] {
+        let meshes = tessellate_scene_tolerance(&scene, tol);
+        let m = &meshes[0];
+        assert!(m.failure.is_none(), "{:?}", m.failure);
+        let (area, _, _) = area_and_box(m);
+        assert!(
+            (f64::from(area) - band).abs() < 0.01 * band,
+            "tol {tol}: area {area}, the band's {band}"
+        );
+        assert_measured_within(&scene, &meshes, tol);
+    }
+}

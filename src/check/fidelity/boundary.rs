@@ -244,10 +244,15 @@ impl Boundary {
         let mut odd = false;
         for lp in &self.loops {
             for w in lp.windows(2) {
-                let (a, b) = (w[0].1, w[1].1);
-                let mut qc = uv[c];
+                let (mut a, mut b) = (w[0].1, w[1].1);
+                let qc = uv[c];
+                // The segment moved by whole periods next to the sample (not the sample next
+                // to each segment: a sample on the seam, u = −1e-17, rounded to 2π against
+                // the last segment and to −1e-17 against the first, and crossed neither).
                 if let Some(p) = period.filter(|p| *p > 0.0) {
-                    qc += ((0.5 * (a[c] + b[c]) - qc) / p).round() * p;
+                    let k = ((0.5 * (a[c] + b[c]) - qc) / p).round() * p;
+                    a[c] -= k;
+                    b[c] -= k;
                 }
                 if (a[c] > qc) != (b[c] > qc) {
                     let t = (qc - a[c]) / (b[c] - a[c]);
