@@ -1244,7 +1244,11 @@ def judge_generated(args):
     def judge(rec, name):
         step = os.path.join(work, name + ".step")
         info = build_isolated(gen, rec, step)
-        built = read_built(step + ".brep", info["built_parts"])
+        try:
+            built = read_built(step + ".brep", info["built_parts"])
+        except Exception as e:  # noqa: BLE001 - judged against OCCT's reading, saying so
+            log("    %s: the parts as built could not be read (%s): judged against OCCT's reading of its STEP" % (name, e))
+            built = None
         return info, run_file(step, rels, args.patchwork, args.max_samples, work, args.seed, built)
 
     try:
