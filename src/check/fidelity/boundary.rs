@@ -15,8 +15,11 @@ pub(super) struct Boundary {
     /// Scales of u and v that make parameter distances roughly 3D distances.
     pub(super) metric: DVec2,
     /// An odd number of loops runs around the periodic direction (or both directions are
-    /// periodic): even-odd has no ray out of the domain, the side test decides.
+    /// periodic and a loop runs around one): even-odd has no ray out of the domain, the side
+    /// test decides.
     wraps: bool,
+    /// The loops' middle along even-odd's ray and its period, when that direction is periodic.
+    ray_middle: Option<(f64, f64)>,
     /// Pole lines across which the surface folds onto itself, with the side (±1 along the
     /// fixed parameter) the loops lie on.
     sheets: Vec<(Pole, f64)>,
@@ -176,12 +179,29 @@ impl Boundary {
         let wraps =
             wrapping % 2 == 1 || (periods.0.is_some() && periods.1.is_some() && wrapping > 0);
 
+        // Along even-odd's ray (v, or u when only v is periodic), when it is periodic too: the
+        // middle of the loops there and the period.
+        let (r, ray_period) = if periods.0.is_some() {
+            (1, periods.1)
+        } else {
+            (0, periods.0)
+        };
+        let (lo, hi) = loops
+            .iter()
+            .flatten()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), q| {
+                (lo.min(q.1[r]), hi.max(q.1[r]))
+            });
+        let ray_middle = ray_period
+            .filter(|p| *p > 0.0 && lo.is_finite() && hi.is_finite())
+            .map(|p| (0.5 * (lo + hi), p));
         Boundary {
             loops,
             periods,
             metric,
             wraps,
             sheets,
+            ray_middle,
         }
     }
 
@@ -227,19 +247,8 @@ impl Boundary {
         let (pu, pv) = self.periods;
         let (c, r, period) = if pu.is_some() { (0, 1, pu) } else { (1, 0, pv) };
         // Periodic along the ray too: the sample within half a period of the loops' middle.
-        let ray_period = if r == 1 { pv } else { pu };
-        if let Some(p) = ray_period.filter(|p| *p > 0.0) {
-            let (lo, hi) = self
-                .loops
-                .iter()
-                .flatten()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), q| {
-                    (lo.min(q.1[r]), hi.max(q.1[r]))
-                });
-            if lo.is_finite() && hi.is_finite() {
-                let mid = 0.5 * (lo + hi);
-                uv[r] -= ((uv[r] - mid) / p).round() * p;
-            }
+        if let Some((mid, p)) = self.ray_middle {
+            uv[r] -= ((uv[r] - mid) / p).round() * p;
         }
         let mut odd = false;
         for lp in &self.loops {
@@ -297,34 +306,25 @@ impl Boundary {
 
     /// Smallest 3D distance from `p` to the boundary polylines.
     pub(super) fn distance_3d(&self, p: DVec3) -> f64 {
-        let mut best = f64::INFINITY;
-        for lp in &self.loops {
-            for w in lp.windows(2).filter(|w| !w[0].2) {
-                best = best.min(dist_to_segment(p, w[0].0, w[1].0));
-            }
-        }
-        best
+        self.nearest(p).map_or(f64::INFINITY, |(d, _)| d)
     }
 
-    /// The parameter of the boundary point nearest to `p` in 3D (along the nearest segment),
-    /// or `None` without boundary segments.
-    pub(super) fn nearest_uv(&self, p: DVec3) -> Option<DVec2> {
+    /// The boundary point nearest to `p` in 3D (along the nearest segment): its distance and
+    /// its parameter; `None` without boundary segments.
+    pub(super) fn nearest(&self, p: DVec3) -> Option<(f64, DVec2)> {
         let mut best: Option<(f64, DVec2)> = None;
         for lp in &self.loops {
             for w in lp.windows(2).filter(|w| !w[0].2) {
                 let (a, b) = (w[0].0, w[1].0);
                 let ab = b - a;
-                let t = match ab.length_squared() {
-                    l if l > 0.0 => ((p - a).dot(ab) / l).clamp(0.0, 1.0),
-                    _ => 0.0,
-                };
-                let d = p.distance(a + ab * t);
+                let t = ((p - a).dot(ab) / ab.length_squared().max(1e-300)).clamp(0.0, 1.0);
+                let d = (a + ab * t).distance(p);
                 if best.is_none_or(|(bd, _)| d < bd) {
                     best = Some((d, w[0].1.lerp(w[1].1, t)));
                 }
             }
         }
-        best.map(|(_, uv)| uv)
+        best
     }
 
     /// Whether `uv` lies on the face's side of the nearest boundary segment.

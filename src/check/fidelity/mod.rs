@@ -290,12 +290,12 @@ pub fn measure(
                     // foot point inside the trim: searched from the nearest boundary point.
                     // Any point of the face bounds the distance to it, so this only lowers
                     // the error to a true one.
-                    let inner = boundary
-                        .nearest_uv(p)
-                        .and_then(|h| face.project(p, Some(h)))
+                    let near = boundary.nearest(p);
+                    let inner = near
+                        .and_then(|(_, h)| face.project(p, Some(h)))
                         .filter(|uv| boundary.inside(face, boundary.on_sheet(face, *uv)))
                         .map(|uv| off(&uv));
-                    let db = boundary.distance_3d(p).min(f64::MAX);
+                    let db = near.map_or(f64::INFINITY, |(d, _)| d).min(f64::MAX);
                     match inner {
                         Some(di) if di <= db.min(eps) => {
                             out.surface_error = out.surface_error.max(di);
@@ -539,10 +539,4 @@ fn record(out: &mut FaceFidelity, err: f64, p: DVec3) {
         out.error = if err.is_finite() { err } else { f64::INFINITY };
         out.worst_at = p;
     }
-}
-
-fn dist_to_segment(p: DVec3, a: DVec3, b: DVec3) -> f64 {
-    let ab = b - a;
-    let t = ((p - a).dot(ab) / ab.length_squared().max(1e-300)).clamp(0.0, 1.0);
-    (a + ab * t).distance(p)
 }
