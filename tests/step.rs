@@ -1450,3 +1450,66 @@ fn a_torus_ring_bounded_by_its_seam_twice_is_measured_inside() {
         assert_measured_within(&scene, &meshes, tol);
     }
 }
+
+/// A cone cut by a plane parallel to a generator (`tests/data/step/cone_parabola_bare_edge.step`,
+/// made with Open CASCADE), the cut's edge pointing at its bare `PARABOLA`: truck-stepio reads a
+/// parabola as a hyperbola, so the edge was healed onto the wrong curve (OCCT judge 6.8 T and
+/// 26 T, `stats` 555 ε). Judged by the parabolic segment's area in closed form (Archimedes:
+/// ⅔ · chord · height, 765.106 mm²; Open CASCADE's `BRepGProp` agrees to 10⁻⁹) and by Open
+/// CASCADE's area of the cone face, no code shared, and by the measure.
+#[test]
+fn a_bare_parabola_edge_bounds_its_faces() {
+    let path = common::root().join("tests/data/step/cone_parabola_bare_edge.step");
+    let scene = load(&path).expect("loads");
+    assert!(scene.skipped.is_empty(), "{:?}", scene.skipped);
+    let chord = 2.0 * (20.0f64 * 20.0 - 8.0 * 8.0).sqrt();
+    let height = (14.0f64 * 14.0 + 28.0 * 28.0).sqrt();
+    let expected = [(117u64, 2.0 / 3.0 * chord * height), (17, 1335.830)];
+    for tol in [0.05, 0.2] {
+        let meshes = tessellate_scene_tolerance(&scene, tol);
+        for (face, want) in expected {
+            let i = scene
+                .patches
+                .iter()
+                .position(|p| matches!(&p.surface, PatchSurface::Trimmed(f) if f.id == face))
+                .expect("the face is drawn");
+            assert!(meshes[i].failure.is_none(), "{:?}", meshes[i].failure);
+            let (area, _, _) = area_and_box(&meshes[i]);
+            let area = f64::from(area);
+            assert!(
+                (area - want).abs() < 0.005 * want,
+                "tol {tol}: face #{face} area {area}, expected {want}"
+            );
+        }
+        let faces = patchwork::check::fidelity::measure_meshes(&scene, &meshes);
+        for (_, f) in &faces {
+            assert!(
+                f.ratio() <= 1.1 && f.outside == 0,
+                "tol {tol}: error/tol {} (outside {})",
+                f.ratio(),
+                f.outside
+            );
+        }
+    }
+}
+
+/// A hyperbola edge whose vertex lies 6.6·10⁵ mm off (a fuzz input mutated from
+/// `wide_cone_hyperbola_trim.step`; `tests/data/fuzz/step/hyperbola_far_vertex.step`): truck's
+/// root finder for the vertex's parameter never returned (CI's fuzz run timed out). Now a clear
+/// error naming the edge, at once; the test gives it a minute, so that a hang fails it rather
+/// than the suite.
+#[test]
+fn a_hyperbola_vertex_far_off_its_curve_is_an_error_not_a_hang() {
+    let path = common::root().join("tests/data/fuzz/step/hyperbola_far_vertex.step");
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = tx.send(load(&path).map(|s| s.patches.len()));
+    });
+    let result = rx
+        .recv_timeout(std::time::Duration::from_secs(60))
+        .expect("reading the file ends within a minute");
+    let err = result
+        .expect_err("its one face cannot be drawn")
+        .to_string();
+    assert!(err.contains("edge #174"), "{err}");
+}

@@ -156,6 +156,12 @@ fn clamped_range(knots: &[f64], degree: usize) -> Option<(f64, f64)> {
 /// estimate at the start of the range (or at 0 for an unbounded curve such as a line).
 fn locate(curve: &Curve3D, p: DVec3, range: Option<(f64, f64)>, tol: f64) -> Option<f64> {
     let on = |t: f64| t.is_finite() && to_dvec(curve.subs(t)).distance(p) <= tol;
+    // truck's search on a hyperbola or a parabola may never return (its root finder's Newton
+    // step has no limit): their parameter in closed form, refined.
+    if let Some(t) = conic_parameter(curve, p) {
+        let t = newton_nearest(curve, p, t);
+        return on(t).then_some(t);
+    }
     if let Some(t) = curve.search_nearest_parameter(to_point(p), None, 30)
         && on(t)
     {
@@ -166,6 +172,29 @@ fn locate(curve: &Curve3D, p: DVec3, range: Option<(f64, f64)>, tol: f64) -> Opt
     let t = t0 + (p - to_dvec(curve.subs(t0))).dot(d) / d.length_squared().max(1e-300);
     let t = newton_nearest(curve, p, t);
     on(t).then_some(t)
+}
+
+/// The parameter of the point of a hyperbola (`cosh t, sinh t` placed) or a parabola
+/// (`t², 2t` placed) with the same ordinate as `p` in the conic's own frame: `p`'s parameter
+/// when it lies on the curve. `None` for other curves.
+fn conic_parameter(curve: &Curve3D, p: DVec3) -> Option<f64> {
+    use truck_stepio::r#in::alias::Conic3D;
+    use truck_stepio::r#in::alias::re_exports::{BoundedCurve, SquareMatrix, Transform};
+    let (local, orientation, (t0, t1)) = match curve {
+        Curve3D::Conic(Conic3D::Hyperbola(h)) => {
+            let inv = h.transform().invert()?;
+            let l = inv.transform_point(to_point(p));
+            (l.y.asinh(), h.orientation(), h.entity().range_tuple())
+        }
+        Curve3D::Conic(Conic3D::Parabola(c)) => {
+            let inv = c.transform().invert()?;
+            let l = inv.transform_point(to_point(p));
+            (0.5 * l.y, c.orientation(), c.entity().range_tuple())
+        }
+        _ => return None,
+    };
+    let t = if orientation { local } else { t0 + t1 - local };
+    t.is_finite().then_some(t)
 }
 
 /// Newton's iteration for the parameter of the point of `curve` nearest `p`, from `t`.

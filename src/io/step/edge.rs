@@ -76,15 +76,13 @@ pub(super) fn convert_edge(
         let geometry = PlaceHolder::<CurveAnyHolder>::Ref(Name::Entity(c3d))
             .into_owned(table)
             .ok()?;
-        EdgeCurve {
+        super::conic::parse_curve3d(&EdgeCurve {
             edge_geometry: geometry,
             ..ec.clone()
-        }
-        .parse_curve3d()
+        })
         .ok()
     });
-    let truck_curve = ec
-        .parse_curve3d()
+    let truck_curve = super::conic::parse_curve3d(&ec)
         .map_err(|e| format!("edge #{id}: curve not supported: {e}"));
     for t in [tol, loose_tol] {
         if let Some(curve) = exact.clone()

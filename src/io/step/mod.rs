@@ -15,6 +15,7 @@
 
 mod bspline_check;
 mod chunks;
+mod conic;
 mod edge;
 pub mod offset;
 pub mod p21;
