@@ -1513,3 +1513,31 @@ fn a_hyperbola_vertex_far_off_its_curve_is_an_error_not_a_hang() {
         .to_string();
     assert!(err.contains("edge #174"), "{err}");
 }
+
+/// A fuzz input mutated from `torus_ring_seam_twice.step` (its axis tilted, a circle's vertex
+/// healed 2.7 mm onto its curve; `tests/data/fuzz/step/torus_eps_out_of_reach.step`, the
+/// slowest face of the fuzz corpus, 0.55 s at 10⁻⁴ of the diagonal): no mesh of the face
+/// reaches ε. Its refinement stops at its work budget, the mesh says which and what error it
+/// reached, and the scene's totals count it (`stats` prints them); the well-formed face
+/// reaches ε and stops at no budget.
+#[test]
+fn a_face_that_cannot_reach_eps_stops_at_its_budget_and_says_so() {
+    let path = common::root().join("tests/data/fuzz/step/torus_eps_out_of_reach.step");
+    let bad = load(&path).expect("loads");
+    let tol = 0.0365;
+    let meshes = tessellate_scene_tolerance(&bad, tol);
+    let m = &meshes[0];
+    assert!(m.failure.is_none(), "{:?}", m.failure);
+    assert!(m.error > tol, "error {} within {tol}", m.error);
+    assert!(
+        m.stopped.is_some(),
+        "error/eps {} and no budget stop",
+        m.error / tol
+    );
+    let s = patchwork::tessellate::MeshStats::of(&meshes);
+    assert_eq!(s.stopped, 1);
+    assert_eq!(s.worst_stopped.map(|w| w.0), Some(m.patch_id));
+    let good = one_face("torus_ring_seam_twice.step");
+    let meshes = tessellate_scene_tolerance(&good, tol);
+    assert!(meshes[0].error <= tol && meshes[0].stopped.is_none());
+}

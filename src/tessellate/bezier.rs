@@ -150,6 +150,8 @@ impl BezierTessellator {
             }
         }
         out.error = error;
+        out.stopped = (error > eps && nu >= MAX_SEGMENTS && nv >= MAX_SEGMENTS)
+            .then_some(super::Stop::Segments(MAX_SEGMENTS));
 
         // Border loop: u = 0 (v up), v = 1 (u up), u = 1 (v down), v = 0 (u down).
         let mut ring = Vec::with_capacity(2 * (cu + cv));

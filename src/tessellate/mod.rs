@@ -57,6 +57,32 @@ pub struct PatchMesh {
     /// draws the shared mesh with the placement; [`PatchMesh::world`] makes the world-space
     /// copy for whoever needs its vertices on the CPU.
     pub instance: Option<Instance>,
+    /// Set when the patch's refinement stopped at its work budget before its measured
+    /// error reached ε (`error` is then what it reached): no input makes one face work without
+    /// bound, and `stats` says which faces stopped short.
+    pub stopped: Option<Stop>,
+}
+
+/// The work budget a tessellator stopped at, short of ε.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stop {
+    /// The trimmed tessellator's vertex budget: 16× its first triangulation's vertices
+    /// + 20 000, at most 400 000 (the count given).
+    Vertices(usize),
+    /// The trimmed tessellator's rounds of error-driven refinement (the count given).
+    Rounds(usize),
+    /// A Bézier grid of [`MAX_SEGMENTS`] steps per direction.
+    Segments(u32),
+}
+
+impl std::fmt::Display for Stop {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Stop::Vertices(n) => write!(f, "its vertex budget ({n})"),
+            Stop::Rounds(n) => write!(f, "{n} rounds of refinement"),
+            Stop::Segments(n) => write!(f, "a grid of {n} x {n} steps"),
+        }
+    }
 }
 
 /// A mesh that is `shared` moved by `transform` ([`PatchMesh::world`]: vertex for vertex
@@ -173,6 +199,7 @@ impl PatchMesh {
             color: self.color,
             arcs: None,
             instance: None,
+            stopped: self.stopped,
         };
         place(&mut out, &inst.transform);
         std::borrow::Cow::Owned(out)
@@ -266,6 +293,7 @@ impl Tessellators {
         out.border_error = None;
         out.arcs = None;
         out.instance = None;
+        out.stopped = None;
         match &patch.surface {
             PatchSurface::Bezier(b) => self.bezier.tessellate(b, eps, out),
             PatchSurface::Mesh(m) => mesh_patch(m, eps, shared_borders, cut, out),
@@ -406,6 +434,7 @@ pub fn instance_of(shared: &PatchMesh, instance: Instance, patch: &Patch) -> Pat
         trim_error: shared.trim_error,
         border_error: shared.border_error.filter(|_| instance.error_added <= 0.0),
         failure: None,
+        stopped: shared.stopped,
         instance: Some(instance),
         ..PatchMesh::default()
     }
@@ -501,6 +530,11 @@ pub struct MeshStats {
     pub worst_error_ratio: f64,
     /// Bytes the meshes hold ([`PatchMesh::mem_bytes`]).
     pub bytes: usize,
+    /// Patches whose refinement stopped at its work budget short of ε
+    /// ([`PatchMesh::stopped`]) ...
+    pub stopped: usize,
+    /// ... and the worst of them: patch id, error / ε reached, the budget.
+    pub worst_stopped: Option<(u32, f64, Stop)>,
 }
 
 impl MeshStats {
@@ -520,6 +554,13 @@ impl MeshStats {
             s.eps_max = s.eps_max.max(m.eps_target);
             if m.eps_target > 0.0 {
                 s.worst_error_ratio = s.worst_error_ratio.max(m.error / m.eps_target);
+            }
+            if let Some(stop) = m.stopped {
+                s.stopped += 1;
+                let ratio = m.error / m.eps_target.max(f64::MIN_POSITIVE);
+                if s.worst_stopped.is_none_or(|(_, r, _)| ratio > r) {
+                    s.worst_stopped = Some((m.patch_id, ratio, stop));
+                }
             }
         }
         if meshes.is_empty() {

@@ -39,7 +39,7 @@ use spade::{ConstrainedDelaunayTriangulation, HierarchyHintGenerator, Point2, Tr
 /// linear on a scrambled order).
 type Cdt = ConstrainedDelaunayTriangulation<Point2<f64>, (), (), (), HierarchyHintGenerator<f64>>;
 
-use super::{PatchMesh, Resolution};
+use super::{PatchMesh, Resolution, Stop};
 use crate::model::poles::{LoopPoint, expand_poles};
 use crate::model::trimmed::{
     Interval, LoopEdge, SurfaceEval, TrimmedFace, TruckSurface, parameter_bounds,
@@ -268,7 +268,8 @@ impl TrimmedTessellator {
         // Refinement may at most multiply the initial vertex count (a misbehaving surface
         // must not eat the machine); the measured error then tells the truth.
         let vertex_cap = (16 * self.uvs.len() + 20_000).min(MAX_VERTICES);
-        for _round in 0..=REFINE_ROUNDS {
+        out.stopped = None;
+        for round in 0..=REFINE_ROUNDS {
             tris.clear();
             let inside_faces = self.inside_faces(&cdt, &domain, use_parity);
             let mut worst = 0.0f64;
@@ -286,7 +287,15 @@ impl TrimmedTessellator {
                 tris.push(t);
             }
             out.error = worst;
-            if to_insert.is_empty() || self.uvs.len() + to_insert.len() > vertex_cap {
+            if to_insert.is_empty() {
+                break;
+            }
+            if self.uvs.len() + to_insert.len() > vertex_cap || round == REFINE_ROUNDS {
+                out.stopped = (worst > eps).then_some(if round == REFINE_ROUNDS {
+                    Stop::Rounds(REFINE_ROUNDS)
+                } else {
+                    Stop::Vertices(vertex_cap)
+                });
                 break;
             }
             for uv in to_insert {

@@ -99,6 +99,14 @@ fn run_one(args: &StatsArgs, file: &Path) -> Result<Value, CliError> {
         "worst error/eps   {:.3} (the tessellator's own samples)",
         s.worst_error_ratio
     );
+    if let Some((patch, ratio, stop)) = s.worst_stopped {
+        data!(
+            "budget stops      {} patches stopped at their work budget short of eps (worst: \
+             {}, error/eps {ratio:.3}, stopped by {stop})",
+            s.stopped,
+            patch_name(&scene, patch)
+        );
+    }
     if !faces.is_empty() {
         let t = Trimmed::of(&faces);
         data!(
@@ -247,6 +255,11 @@ fn json_report(
         "eps_min": s.eps_min,
         "eps_max": s.eps_max,
         "worst_error_ratio": s.worst_error_ratio,
+        "budget_stops": s.stopped,
+        "worst_budget_stop": s.worst_stopped.map(|(patch, ratio, stop)| json!({
+            "patch": patch, "name": patch_name(scene, patch), "error_ratio": ratio,
+            "budget": stop.to_string(),
+        })),
         "trimmed": trimmed,
         "instances": scene.instances.len(),
         "parts": scene.parts.len(),
@@ -367,5 +380,15 @@ fn print_parts(scene: &Scene, meshes: &[PatchMesh]) {
             t.y,
             t.z
         );
+    }
+}
+
+/// `patch P` and, for a trimmed face, its entity id.
+fn patch_name(scene: &patchwork::model::Scene, patch: u32) -> String {
+    match scene.patches.get(patch as usize).map(|p| &p.surface) {
+        Some(patchwork::model::PatchSurface::Trimmed(f)) => {
+            format!("patch {patch}, face #{}", f.id)
+        }
+        _ => format!("patch {patch}"),
     }
 }
