@@ -177,7 +177,7 @@ fn locate(curve: &Curve3D, p: DVec3, range: Option<(f64, f64)>, tol: f64) -> Opt
 /// The parameter of the point of a hyperbola (`cosh t, sinh t` placed) or a parabola
 /// (`t², 2t` placed) with the same ordinate as `p` in the conic's own frame: `p`'s parameter
 /// when it lies on the curve. `None` for other curves.
-fn conic_parameter(curve: &Curve3D, p: DVec3) -> Option<f64> {
+pub(crate) fn conic_parameter(curve: &Curve3D, p: DVec3) -> Option<f64> {
     use truck_stepio::r#in::alias::Conic3D;
     use truck_stepio::r#in::alias::re_exports::{BoundedCurve, SquareMatrix, Transform};
     let (local, orientation, (t0, t1)) = match curve {

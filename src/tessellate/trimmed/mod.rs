@@ -164,6 +164,7 @@ impl TrimmedTessellator {
         out.borders.clear();
         out.eps_target = eps;
         out.error = 0.0;
+        out.stopped = None;
         let s = face;
         let mut report = TrimReport::default();
         if face.loops.is_empty() {
@@ -268,7 +269,6 @@ impl TrimmedTessellator {
         // Refinement may at most multiply the initial vertex count (a misbehaving surface
         // must not eat the machine); the measured error then tells the truth.
         let vertex_cap = (16 * self.uvs.len() + 20_000).min(MAX_VERTICES);
-        out.stopped = None;
         for round in 0..=REFINE_ROUNDS {
             tris.clear();
             let inside_faces = self.inside_faces(&cdt, &domain, use_parity);
@@ -290,12 +290,14 @@ impl TrimmedTessellator {
             if to_insert.is_empty() {
                 break;
             }
-            if self.uvs.len() + to_insert.len() > vertex_cap || round == REFINE_ROUNDS {
-                out.stopped = (worst > eps).then_some(if round == REFINE_ROUNDS {
-                    Stop::Rounds(REFINE_ROUNDS)
-                } else {
-                    Stop::Vertices(vertex_cap)
-                });
+            let stop = if round == REFINE_ROUNDS {
+                Some(Stop::Rounds(REFINE_ROUNDS))
+            } else {
+                (self.uvs.len() + to_insert.len() > vertex_cap)
+                    .then_some(Stop::Vertices(vertex_cap))
+            };
+            if let Some(stop) = stop {
+                out.stopped = (worst > eps).then_some(stop);
                 break;
             }
             for uv in to_insert {
