@@ -475,3 +475,31 @@ fn implode_frames_the_assembled_model() {
         "the last frame is the rendered model: {assembled} vs {render}"
     );
 }
+
+/// `patchwork stats … | head -1`: the reader closes the pipe. `println!` panicked on the
+/// next line ("failed printing to stdout: Broken pipe"), exit code 101 and a
+/// backtrace; now the command stops printing and ends as it would have.
+#[test]
+fn stats_into_a_closed_pipe_ends_without_a_panic() {
+    use std::io::Read;
+    use std::process::Stdio;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_patchwork"))
+        .args(["stats", &model("teapot.bpt"), "--tolerance", "0.01"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the binary runs");
+    // Close our end at once: stats loads and tessellates before its first line, so every
+    // line it prints meets a closed pipe.
+    drop(child.stdout.take().expect("piped"));
+    let mut err = String::new();
+    child
+        .stderr
+        .take()
+        .expect("piped")
+        .read_to_string(&mut err)
+        .expect("stderr reads");
+    let status = child.wait().expect("stats ends");
+    assert!(!err.contains("panicked"), "{err}");
+    assert_eq!(status.code(), Some(0), "{err}");
+}

@@ -6,7 +6,9 @@
 //! - `-q/--quiet` silences both text data and diagnostics; errors (`error: …`, exit code 2) and
 //!   `--json` output are always printed.
 
+use std::io::Write as _;
 use std::sync::OnceLock;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Mode {
@@ -41,10 +43,35 @@ pub fn json() -> bool {
     mode().json
 }
 
+/// Set once stdout is closed (`patchwork stats … | head`): the command goes on without
+/// printing (its work, files and exit code stand) instead of panicking in `println!`.
+static STDOUT_CLOSED: AtomicBool = AtomicBool::new(false);
+
+/// Writes `text` to stdout; a closed pipe stops further output, nothing else.
+pub fn write(text: std::fmt::Arguments<'_>) {
+    if STDOUT_CLOSED.load(Ordering::Relaxed) {
+        return;
+    }
+    let mut out = std::io::stdout().lock();
+    if out.write_fmt(text).and_then(|()| out.flush()).is_err() {
+        STDOUT_CLOSED.store(true, Ordering::Relaxed);
+    }
+}
+
+/// A line on stdout through [`write`] (`println!` panics on a closed pipe).
+macro_rules! outln {
+    () => {
+        $crate::out::write(format_args!("\n"))
+    };
+    ($($t:tt)*) => {
+        $crate::out::write(format_args!("{}\n", format_args!($($t)*)))
+    };
+}
+
 /// Prints `value` as one line of JSON on stdout (with `--json`).
 pub fn emit(value: &serde_json::Value) {
     if json() {
-        println!("{value}");
+        outln!("{value}");
     }
 }
 
@@ -52,7 +79,7 @@ pub fn emit(value: &serde_json::Value) {
 macro_rules! data {
     ($($t:tt)*) => {
         if $crate::out::text() {
-            println!($($t)*);
+            $crate::out::outln!($($t)*);
         }
     };
 }
@@ -66,4 +93,4 @@ macro_rules! note {
     };
 }
 
-pub(crate) use {data, note};
+pub(crate) use {data, note, outln};

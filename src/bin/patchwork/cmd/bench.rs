@@ -341,7 +341,7 @@ fn run_scale(args: &BenchArgs) -> Result<bool, CliError> {
         args.pixel_error,
         args.budget.budget_ms
     );
-    print!("{}", scale_report::markdown(&points));
+    crate::out::write(format_args!("{}", scale_report::markdown(&points)));
     if let Some(csv) = &args.csv {
         png::write_text(csv, &scale_report::csv(&points))?;
         data!("wrote {}", csv.display());
@@ -434,6 +434,6 @@ pub fn run_scale_point(args: &ScalePointArgs) -> Result<(), CliError> {
     };
     let mut renderer = Renderer::new()?;
     let run = run_point(&mut renderer, &source, &opts, |_| {})?;
-    println!("{POINT_PREFIX}{}", scale_report::csv_row(&run.point));
+    crate::out::outln!("{POINT_PREFIX}{}", scale_report::csv_row(&run.point));
     Ok(())
 }
