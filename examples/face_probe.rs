@@ -149,7 +149,7 @@ fn main() {
                     patchwork::check::fidelity::measure(&face, &pos, &out.triangles, eps)
                 {
                     println!(
-                        "  measure: error/eps {:.3}, surface {:.3}, outside {} of {}, missing/eps {:.3}, worst at {:.3}",
+                        "  measure: error/eps {:.3}, surface {:.3}, outside {} of {}, missing/eps {:.3}, worst at {:?}",
                         f.ratio(),
                         f.surface_error / eps,
                         f.outside,
@@ -158,6 +158,47 @@ fn main() {
                         f.worst_at
                     );
                     use patchwork::model::trimmed::SurfaceEval;
+                    // Brute force, no code shared with the measure: the worst point's distance
+                    // to the face's own mesh.
+                    let brute = out
+                        .triangles
+                        .iter()
+                        .map(|t| {
+                            let [a, b, c] = t.map(|i| pos[i as usize]);
+                            patchwork::geom::point_triangle_distance(f.worst_at, a, b, c)
+                        })
+                        .fold(f64::INFINITY, f64::min);
+                    println!(
+                        "  worst point to the mesh (brute force): {:.3} eps",
+                        brute / eps
+                    );
+                    if std::env::var_os("FACE_PROBE_NEAR").is_some() {
+                        // The triangles nearest the worst point, their corners' parameters.
+                        let mut near: Vec<(f64, usize)> = out
+                            .triangles
+                            .iter()
+                            .enumerate()
+                            .map(|(k, t)| {
+                                let [a, b, c] = t.map(|i| pos[i as usize]);
+                                let d =
+                                    patchwork::geom::point_triangle_distance(f.worst_at, a, b, c);
+                                (d, k)
+                            })
+                            .collect();
+                        near.retain(|x| x.0.is_finite());
+                        near.sort_by(|a, b| a.0.total_cmp(&b.0));
+                        for &(d, k) in near.iter().take(4) {
+                            let t = out.triangles[k];
+                            let uvs: Vec<String> = t
+                                .iter()
+                                .map(|&i| {
+                                    let p = pos[i as usize];
+                                    format!("{:?}", face.project(p, None).map(|uv| (uv.x, uv.y)))
+                                })
+                                .collect();
+                            println!("    tri {k} at {:.3} eps: {}", d / eps, uvs.join(" "));
+                        }
+                    }
                     let uv = face.project(f.worst_at, None);
                     println!(
                         "  worst projects to {uv:?}, off {:?}",

@@ -7,6 +7,12 @@ use glam::DVec3;
 pub fn closest_point_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
     let ab = b - a;
     let ac = c - a;
+    if ab.cross(ac) == DVec3::ZERO {
+        // Two corners the same, or all three on a line: the walk below would divide 0 by 0
+        // (a triangle (a, a, c) gave NaN, and a caller's `min` then skipped it: a tube
+        // tessellated to slivers along its seam read as 3.2 ε from its own mesh).
+        return nearest_edge_point(p, a, b, c);
+    }
     let ap = p - a;
     let d1 = ab.dot(ap);
     let d2 = ac.dot(ap);
@@ -39,14 +45,19 @@ pub fn closest_point_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> DVec
     }
     let denom = va + vb + vc;
     if denom.abs() < f64::MIN_POSITIVE {
-        // Collinear corners not caught above: the nearest of the three edges.
-        return [(a, b), (b, c), (c, a)]
-            .into_iter()
-            .map(|(s, e)| closest_point_on_segment(p, s, e))
-            .min_by(|x, y| x.distance_squared(p).total_cmp(&y.distance_squared(p)))
-            .unwrap_or(a);
+        // Collinear corners not caught above.
+        return nearest_edge_point(p, a, b, c);
     }
     a + ab * (vb / denom) + ac * (vc / denom)
+}
+
+/// The nearest point to `p` on the three edges of `(a, b, c)`.
+fn nearest_edge_point(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
+    [(a, b), (b, c), (c, a)]
+        .into_iter()
+        .map(|(s, e)| closest_point_on_segment(p, s, e))
+        .min_by(|x, y| x.distance_squared(p).total_cmp(&y.distance_squared(p)))
+        .unwrap_or(a)
 }
 
 /// Closest point to `p` on the segment `s..e`.
@@ -111,5 +122,20 @@ mod tests {
         assert!((point_triangle_distance(p, a, a, a) - p.length()).abs() < 1e-12);
         let mid = DVec3::new(0.5, 0.0, 0.0);
         assert!((point_triangle_distance(p, a, mid, b) - 1.0).abs() < 1e-12);
+        // A corner repeated in every position, the point beside, before and beyond the
+        // segment: (a, a, b) and (a, b, a) gave NaN.
+        for (q, want) in [
+            (p, 1.0),
+            (DVec3::new(-1.0, 1.0, 0.0), 2f64.sqrt()),
+            (DVec3::new(2.0, 0.0, 1.0), 2f64.sqrt()),
+        ] {
+            for (x, y, z) in [(a, a, b), (a, b, a), (b, a, a), (a, b, b), (b, a, b)] {
+                let d = point_triangle_distance(q, x, y, z);
+                assert!(
+                    (d - want).abs() < 1e-12,
+                    "{q} to ({x}, {y}, {z}): {d}, not {want}"
+                );
+            }
+        }
     }
 }

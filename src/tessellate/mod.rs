@@ -66,8 +66,9 @@ pub struct PatchMesh {
 /// The work budget a tessellator stopped at, short of ε.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Stop {
-    /// The trimmed tessellator's vertex budget: 16× its first triangulation's vertices
-    /// + 20 000, at most 400 000 (the count given).
+    /// The trimmed tessellator's vertex budget, from the face's area over ε² (its screen
+    /// area in pixel errors squared; `tessellate::trimmed`'s `vertex_budget`), at most
+    /// 400 000 (the count given).
     Vertices(usize),
     /// The trimmed tessellator's rounds of error-driven refinement (the count given).
     Rounds(usize),

@@ -85,14 +85,18 @@ impl Boundary {
             *uses.entry(le.edge.id).or_default() += 1;
         }
         for lp in &face.loops {
-            let mut pts: Vec<(DVec3, bool)> = Vec::new();
-            for le in lp {
+            // Per point: 3D, seam, and (edge, parameter) for splitting in `parameter_split`.
+            let mut pts: Vec<(DVec3, bool, (usize, f64))> = Vec::new();
+            // Each edge's last parameter along the loop (its end is the next edge's start).
+            let mut ends: Vec<f64> = Vec::with_capacity(lp.len());
+            for (ei, le) in lp.iter().enumerate() {
                 let e = &le.edge;
                 let (a, b) = if le.forward {
                     (e.t0, e.t1)
                 } else {
                     (e.t1, e.t0)
                 };
+                ends.push(b);
                 let mut ts = vec![a, b];
                 // Split until every chord is within `tol` of the curve at its midpoint.
                 let mut k = 0;
@@ -116,7 +120,7 @@ impl Boundary {
                 let seam = uses.get(&e.id).is_some_and(|&n| n > 1);
                 let n = ts.len();
                 for (i, &t) in ts.iter().enumerate().take(n - 1) {
-                    pts.push((if i == 0 { first } else { e.point(t) }, seam));
+                    pts.push((if i == 0 { first } else { e.point(t) }, seam, (ei, t)));
                 }
             }
             if pts.len() < 2 {
@@ -129,7 +133,8 @@ impl Boundary {
             // closed surface extended past its seam, a vertex at the seam is nearest to the
             // extension as well (generated model gen-7-6).
             let mut prev: Option<DVec2> = face.project_along(pts[1].0, None, far, &mut fine_left);
-            for &(p, seam) in &pts {
+            let mut last: Option<(usize, f64)> = None;
+            for &(p, seam, at) in &pts {
                 let Some(mut uv) = face.project_along(p, prev, far, &mut fine_left) else {
                     continue;
                 };
@@ -139,6 +144,20 @@ impl Boundary {
                         continue;
                     }
                 }
+                // Between two points of one edge: split where the chord in parameter space
+                // strays from the curve on the surface (a nearly straight edge on a torus
+                // whose parameter image bends: its uv chord cut 1.9 ε off the face).
+                // From an edge's last point to the next edge's start: the rest of that edge.
+                if let (Some((ei, ta)), Some(q)) = (last, prev) {
+                    let e = &lp[ei].edge;
+                    let tb = if ei == at.0 { at.1 } else { ends[ei] };
+                    let mut mid = Vec::new();
+                    parameter_split(face, e, (ta, q), (tb, uv), tol, periods, 12, &mut mid);
+                    for (pm, uvm) in mid {
+                        out.push((pm, uvm, seam));
+                    }
+                }
+                last = Some(at);
                 let (su, sv) = face.derivs(uv);
                 if su.is_finite() && sv.is_finite() {
                     speeds += DVec2::new(su.length(), sv.length());
@@ -146,6 +165,27 @@ impl Boundary {
                 }
                 out.push((p, uv, seam));
                 prev = Some(uv);
+            }
+            // The last edge's rest, to the loop's first point.
+            if let (Some(&(_, first, _)), Some(&(_, end, end_seam)), Some((ei, ta))) =
+                (out.first(), out.last(), last)
+            {
+                let close = unwrap_near(first, end, periods);
+                let mut mid = Vec::new();
+                let e = &lp[ei].edge;
+                parameter_split(
+                    face,
+                    e,
+                    (ta, end),
+                    (ends[ei], close),
+                    tol,
+                    periods,
+                    12,
+                    &mut mid,
+                );
+                for (pm, uvm) in mid {
+                    out.push((pm, uvm, end_seam));
+                }
             }
             // Through a pole the loop runs along the pole line (no boundary in 3D: a segment
             // flagged like a seam), on the sheet where the face lies on its `domain_left`.
@@ -392,6 +432,43 @@ impl Boundary {
 }
 
 /// `uv` shifted by whole periods to lie nearest `near`.
+/// The points to insert between `(ta, uva)` and `(tb, uvb)`, two points of the edge `e`
+/// whose parameters on the face are known, in order: the curve's point at the middle
+/// parameter wherever the surface's point at the middle of the two uv differs from it by
+/// more than `tol`, recursively (to `depth` halvings).
+#[allow(clippy::too_many_arguments)]
+fn parameter_split(
+    face: &TrimmedFace,
+    e: &crate::model::trimmed::TrimEdge,
+    (ta, uva): (f64, DVec2),
+    (tb, uvb): (f64, DVec2),
+    tol: f64,
+    periods: (Option<f64>, Option<f64>),
+    depth: usize,
+    out: &mut Vec<(DVec3, DVec2)>,
+) {
+    let tm = 0.5 * (ta + tb);
+    let pm = e.point(tm);
+    if depth == 0 || face.point(0.5 * (uva + uvb)).distance(pm) <= tol {
+        return;
+    }
+    let Some(uvm) = face.project(pm, Some(0.5 * (uva + uvb))) else {
+        return;
+    };
+    let uvm = unwrap_near(uvm, 0.5 * (uva + uvb), periods);
+    // Not on the surface here, or on another sheet of a surface that covers itself (a
+    // circle swept about its diameter: (u, v) and (u + π, π − v) are one point), far from
+    // the segment in parameters: the chord stays.
+    if face.point(uvm).distance(pm) > tol.max(1e-3 * face.bounds.radius)
+        || uvm.distance(0.5 * (uva + uvb)) > 0.5 * uva.distance(uvb)
+    {
+        return;
+    }
+    parameter_split(face, e, (ta, uva), (tm, uvm), tol, periods, depth - 1, out);
+    out.push((pm, uvm));
+    parameter_split(face, e, (tm, uvm), (tb, uvb), tol, periods, depth - 1, out);
+}
+
 pub(super) fn unwrap_near(
     mut uv: DVec2,
     near: DVec2,

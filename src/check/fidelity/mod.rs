@@ -84,6 +84,11 @@ pub struct FaceFidelity {
     pub face_samples: usize,
     /// Where the worst sample is, on the mesh or on the face (face units).
     pub worst_at: DVec3,
+    /// Largest distance from the surface of a mesh vertex that lies on the face's edge
+    /// curves (face units): how far the file's own edges stray off the face. A mesh through
+    /// its border can be no nearer the surface there, so a sample's distance to the surface
+    /// is counted beyond what its triangle's border corners' distances give at its place.
+    pub edge_offset: f64,
 }
 
 impl FaceFidelity {
@@ -211,8 +216,10 @@ pub fn measure(
         uncovered: 0,
         face_samples: 0,
         worst_at: DVec3::ZERO,
+        edge_offset: 0.0,
     };
     let mut vertex_uv: Vec<Option<DVec2>> = vec![None; positions.len()];
+    let mut vertex_off: Vec<Option<f64>> = vec![None; positions.len()];
     for t in triangles {
         let Some(corners) = t
             .map(|i| positions.get(i as usize).copied())
@@ -243,11 +250,31 @@ pub fn measure(
                 uv
             }
         };
+        // The corners' own distances from the surface where they lie on the face's edge
+        // curves (0 elsewhere: an inner vertex must lie on the surface).
+        let given: Vec<f64> = t
+            .iter()
+            .zip(&corners)
+            .map(
+                |(&i, &c)| match vertex_off.get(i as usize).copied().flatten() {
+                    Some(o) => o,
+                    None => {
+                        let o = edge_offset(face, &boundary, c, eps);
+                        if let Some(slot) = vertex_off.get_mut(i as usize) {
+                            *slot = Some(o);
+                        }
+                        out.edge_offset = out.edge_offset.max(o);
+                        o
+                    }
+                },
+            )
+            .collect();
         let mut prev = hint;
         for i in 0..=n {
             for j in 0..=(n - i) {
                 let (a, b) = (i as f64 / n as f64, j as f64 / n as f64);
                 let p = corners[0] * (1.0 - a - b) + corners[1] * a + corners[2] * b;
+                let allowed = given[0] * (1.0 - a - b) + given[1] * a + given[2] * b;
                 // From the previous sample, and from scratch when that lands far off (a
                 // search can end at a cone's apex or across a seam).
                 let near = face.project(p, Some(prev));
@@ -281,7 +308,7 @@ pub fn measure(
                     continue;
                 };
                 prev = uv;
-                let d = face.point(uv).distance(p);
+                let d = (face.point(uv).distance(p) - allowed).max(0.0);
                 let err = if boundary.inside(face, boundary.on_sheet(face, uv)) {
                     out.surface_error = out.surface_error.max(d);
                     d
@@ -294,7 +321,7 @@ pub fn measure(
                     let inner = near
                         .and_then(|(_, h)| face.project(p, Some(h)))
                         .filter(|uv| boundary.inside(face, boundary.on_sheet(face, *uv)))
-                        .map(|uv| off(&uv));
+                        .map(|uv| (off(&uv) - allowed).max(0.0));
                     let db = near.map_or(f64::INFINITY, |(d, _)| d).min(f64::MAX);
                     match inner {
                         Some(di) if di <= db.min(eps) => {
@@ -315,6 +342,25 @@ pub fn measure(
     }
     cover(face, &boundary, positions, triangles, eps, &mut out);
     Some(out)
+}
+
+/// How far `p`, a mesh vertex, lies off the face's surface if it lies on the face's edge
+/// curves (within ε/4 of their polylines: a border vertex), else 0.
+fn edge_offset(face: &TrimmedFace, boundary: &Boundary, p: DVec3, eps: f64) -> f64 {
+    let Some((d, hint)) = boundary.nearest(p) else {
+        return 0.0;
+    };
+    if d > 0.25 * eps {
+        return 0.0;
+    }
+    // No foot point: no allowance (never an infinite one).
+    [face.project(p, Some(hint)), face.project(p, None)]
+        .into_iter()
+        .flatten()
+        .map(|uv| face.point(uv).distance(p))
+        .filter(|d| d.is_finite())
+        .reduce(f64::min)
+        .unwrap_or(0.0)
 }
 
 /// The face's own samples against the mesh: [`FaceFidelity::missing`].

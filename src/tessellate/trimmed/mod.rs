@@ -63,6 +63,31 @@ const REFINE_ROUNDS: usize = 10;
 const REFINE_TARGET: f64 = 0.95;
 /// Most vertices per face.
 const MAX_VERTICES: usize = 400_000;
+/// Vertices per ε² of a face's area that refinement may reach: a triangulation of edges
+/// ε/4 has about 18.5 (equilateral triangles of area √3/64 ε², two per vertex). A chord
+/// of ε/4 strays ε/(128 r/ε) from a curve of radius r, so only detail of radius below
+/// ε/128 (with ε from ½ px: 1/256 of a pixel) can need more.
+const VERTICES_PER_EPS2: f64 = 18.5;
+/// Refinement may always add this many vertices to the first triangulation, however small
+/// the face (a face much smaller than ε² needs none; this is for area estimates that a
+/// coarse first triangulation gets wrong).
+const MIN_EXTRA_VERTICES: usize = 1024;
+
+/// The vertex budget of a face of `area` at `eps` whose first triangulation has `initial`
+/// vertices: its screen area in units of the pixel error squared (`area / eps²`, ε being
+/// derived from the pixel error for the view) times [`VERTICES_PER_EPS2`], at least the
+/// first triangulation and [`MIN_EXTRA_VERTICES`] more, at most [`MAX_VERTICES`]. A face
+/// that needs more is detail below 1/128 of ε, or a surface that misbehaves (a fuzzed torus
+/// whose minor radius vanishes): refinement stops there and says so (`Stop::Vertices`).
+fn vertex_budget(area: f64, eps: f64, initial: usize) -> usize {
+    let derived = VERTICES_PER_EPS2 * area / (eps * eps);
+    let derived = if derived.is_finite() {
+        derived.min(MAX_VERTICES as f64) as usize
+    } else {
+        MAX_VERTICES
+    };
+    derived.max(initial + MIN_EXTRA_VERTICES).min(MAX_VERTICES)
+}
 
 /// Why a face could not be tessellated.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -108,6 +133,9 @@ pub struct TrimmedTessellator {
     loops: Vec<Vec<BPoint>>,
     uvs: Vec<DVec2>,
     pos: Vec<DVec3>,
+    /// Each vertex's distance from the surface at its parameter: 0 inside, and on the border
+    /// how far the face's own edge curve lies off its surface there.
+    off: Vec<f64>,
 }
 
 /// What the tessellator achieved besides the mesh.
@@ -117,6 +145,11 @@ pub struct TrimReport {
     pub trim_error: f64,
     /// Edge constraints spade could not add (crossing trim polylines).
     pub crossing_constraints: usize,
+    /// Largest distance of a border point (on the face's edge curves) from the face's
+    /// surface: a file whose edges lie off their faces (an OCCT offset that failed, leaving
+    /// edges 0.57 mm off a plane: generated model 1-32). No mesh through those points can be
+    /// nearer the surface; the error refinement works to is what the mesh adds to it.
+    pub edge_offset: f64,
 }
 
 impl TrimmedTessellator {
@@ -205,6 +238,7 @@ impl TrimmedTessellator {
         let mut cdt = Cdt::new();
         self.uvs.clear();
         self.pos.clear();
+        self.off.clear();
         // Border points in a scrambled order: inserted one after the other along a long,
         // nearly straight trim curve, every insertion flipped edges back along the whole
         // curve (quadratic: 7 600 points of a fuzzed face took 100 s inside spade). A fixed
@@ -221,6 +255,7 @@ impl TrimmedTessellator {
             let h = self.insert(&mut cdt, scale, b.uv, Some(b.p), s)?;
             border_ids[li][k] = h.index() as u32;
         }
+        report.edge_offset = self.off.iter().copied().fold(0.0, f64::max);
         for ids in &border_ids {
             for k in 0..ids.len() {
                 let (a, b) = (ids[k], ids[(k + 1) % ids.len()]);
@@ -266,9 +301,9 @@ impl TrimmedTessellator {
         // 5: error-driven refinement.
         let use_parity = report.crossing_constraints == 0;
         let mut tris = Vec::new();
-        // Refinement may at most multiply the initial vertex count (a misbehaving surface
-        // must not eat the machine); the measured error then tells the truth.
-        let vertex_cap = (16 * self.uvs.len() + 20_000).min(MAX_VERTICES);
+        // The face's work budget, from its size against ε (set after the first round, when
+        // its area is known): see [`vertex_budget`]. The measured error then tells the truth.
+        let mut vertex_cap = MAX_VERTICES;
         for round in 0..=REFINE_ROUNDS {
             tris.clear();
             let inside_faces = self.inside_faces(&cdt, &domain, use_parity);
@@ -289,6 +324,9 @@ impl TrimmedTessellator {
             out.error = worst;
             if to_insert.is_empty() {
                 break;
+            }
+            if round == 0 {
+                vertex_cap = vertex_budget(self.area(&tris), eps, self.uvs.len());
             }
             let stop = if round == REFINE_ROUNDS {
                 Some(Stop::Rounds(REFINE_ROUNDS))
@@ -370,7 +408,11 @@ impl TrimmedTessellator {
             .map_err(|_| TrimError::NotFinite)?;
         if h.index() == self.uvs.len() {
             self.uvs.push(uv);
-            self.pos.push(p.unwrap_or_else(|| s.point(uv)));
+            let on = s.point(uv);
+            let p = p.unwrap_or(on);
+            let off = p.distance(on);
+            self.pos.push(p);
+            self.off.push(if off.is_finite() { off } else { 0.0 });
         }
         Ok(h)
     }
@@ -434,7 +476,19 @@ impl TrimmedTessellator {
             .collect()
     }
 
-    /// Largest distance surface ↔ triangle at 7 samples.
+    /// Area of the triangles `tris` (3D, their vertices' positions).
+    fn area(&self, tris: &[[u32; 3]]) -> f64 {
+        tris.iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| self.pos[i as usize]);
+                0.5 * (b - a).cross(c - a).length()
+            })
+            .sum()
+    }
+
+    /// Largest distance surface ↔ triangle at 7 samples, beyond what its corners' own
+    /// distances from the surface (`off`: border points on edge curves that lie off it)
+    /// account for there — refinement cannot move the border.
     fn triangle_error(&self, s: &impl SurfaceEval, t: [u32; 3]) -> f64 {
         let (u0, u1, u2) = (
             self.uvs[t[0] as usize],
@@ -446,6 +500,7 @@ impl TrimmedTessellator {
             self.pos[t[1] as usize],
             self.pos[t[2] as usize],
         );
+        let o = t.map(|i| self.off[i as usize]);
         const B: [[f64; 3]; 7] = [
             [1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0],
             [0.5, 0.5, 0.0],
@@ -459,7 +514,8 @@ impl TrimmedTessellator {
             .map(|b| {
                 let uv = u0 * b[0] + u1 * b[1] + u2 * b[2];
                 let lin = p0 * b[0] + p1 * b[1] + p2 * b[2];
-                s.point(uv).distance(lin)
+                let given = o[0] * b[0] + o[1] * b[1] + o[2] * b[2];
+                (s.point(uv).distance(lin) - given).max(0.0)
             })
             .fold(0.0, f64::max)
     }
