@@ -230,9 +230,11 @@ pub fn read_with(
         jobs.extend_from_slice(&ids);
         face_ids.insert(shell, ids);
     }
+    let by_vertex = edge::vertex_edges(&table);
     let source = FaceSource {
         file: &file,
         table: &table,
+        by_vertex: &by_vertex,
         vertex_loops: &vertex_loops,
         angle_rad: structure.plane_angle_rad,
         uncertainty: structure.uncertainty,
@@ -302,7 +304,8 @@ pub fn read_with(
             .collect();
         warnings.push(format!(
             "{} edges have vertices off their curve beyond the file's tolerance, healed as a \
-             kernel does, each vertex moved to its nearest point of the curve ({}{})",
+             kernel does, each vertex moved to where its healed edges' curves meet (or its nearest \
+             point of the curve) ({}{})",
             healed.len(),
             list.join(", "),
             if healed.len() > 5 { ", …" } else { "" }
@@ -471,6 +474,8 @@ struct FaceSource<'a> {
     file: &'a p21::P21File,
     table: &'a Table,
     vertex_loops: &'a std::collections::HashSet<u64>,
+    /// The edges at each vertex (healing moves a vertex alike for all of them).
+    by_vertex: &'a edge::VertexEdges,
     /// Radians per file plane-angle unit.
     angle_rad: Option<f64>,
     /// The file's distance uncertainty (file units).
@@ -496,6 +501,7 @@ fn convert_face(
         uncertainty,
         offsets_refused,
         evaluated_offsets,
+        by_vertex,
     } = *src;
     let face: FaceSurfaceHolder = if let Some(f) = table.face_surface.get(&id) {
         f.clone()
@@ -575,7 +581,7 @@ fn convert_face(
                     .edge_curve
                     .get(&ecid)
                     .ok_or_else(|| format!("edge #{ecid} is not a readable EDGE_CURVE"))?;
-                let (e, fit) = convert_edge(file, table, ecid, holder, uncertainty)?;
+                let (e, fit) = convert_edge(file, table, ecid, holder, uncertainty, by_vertex)?;
                 Ok((Arc::new(e), fit))
             })?;
             out.push(LoopEdge { edge, forward });
