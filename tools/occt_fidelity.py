@@ -497,8 +497,10 @@ class Occt:
                         "sub": ins["sub"], "M": M})
         return out
 
-    def brep_distance(self, ins, point):
-        """Exact distance from a world point to an instance's B-rep (BRepExtrema)."""
+    def brep_distance(self, ins, point, far=float("inf")):
+        """Exact distance from a world point to an instance's B-rep (BRepExtrema); where that
+        exceeds `far`, also to the faces' surfaces at feet inside the faces (see
+        `_surface_distance`)."""
         from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeVertex
         from OCP.BRepExtrema import BRepExtrema_DistShapeShape
         from OCP.gp import gp_Pnt
@@ -507,7 +509,48 @@ class Occt:
         q = np.linalg.solve(M[:3, :3], np.asarray(point, dtype=np.float64) - M[:3, 3])  # into the part's frame
         shape = self._boundary(ins["proto"], ins["sub"])
         d = BRepExtrema_DistShapeShape(BRepBuilderAPI_MakeVertex(gp_Pnt(*q.tolist())).Vertex(), shape)
-        return d.Value() if d.IsDone() else float("nan")
+        best = d.Value() if d.IsDone() else float("nan")
+        if not best <= far:  # also when BRepExtrema failed (nan)
+            best = min(best if best == best else np.inf, self._surface_distance(ins["proto"], q, best))
+        return best
+
+    def _surface_distance(self, proto, q, beyond):
+        """Distance from q (the part's frame) to the faces' surfaces at feet that OCCT's face
+        classifier puts in or on the face (pcurves, 2D tolerance 1e-6 of the face's parameter
+        span): BRepExtrema falls back on the 3D edges for a foot just outside a face, and a
+        face whose 3D edge stops short of its pcurve (gen-1-78: OCCT's offset of a box, a line
+        edge ending at a vertex 20 off the circle it meets, its tolerance grown to 20.1) then
+        puts a point on the face's border 1.5 mm away from it. Only faces whose box lies within
+        `beyond` of q are tried."""
+        from OCP.Bnd import Bnd_Box
+        from OCP.BRep import BRep_Tool
+        from OCP.BRepBndLib import BRepBndLib
+        from OCP.BRepClass import BRepClass_FaceClassifier
+        from OCP.BRepTools import BRepTools
+        from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
+        from OCP.TopAbs import TopAbs_IN, TopAbs_ON
+        from OCP.TopoDS import TopoDS
+        from OCP.gp import gp_Pnt, gp_Pnt2d
+
+        p = gp_Pnt(*q.tolist())
+        best = float("inf")
+        for f in self.protos[proto]["faces"]:
+            face = TopoDS.Face(f)
+            b = Bnd_Box()
+            BRepBndLib.Add_s(face, b, False)
+            if b.IsVoid() or b.Distance(Bnd_Box(p, p)) > beyond:
+                continue
+            surf = BRep_Tool.Surface_s(face)
+            proj = GeomAPI_ProjectPointOnSurf(p, surf)
+            if proj.NbPoints() == 0 or proj.LowerDistance() >= best:
+                continue
+            u, v = proj.LowerDistanceParameters()
+            u0, u1, v0, v1 = BRepTools.UVBounds_s(face)
+            tol = 1e-6 * max(u1 - u0, v1 - v0, 1e-12)
+            state = BRepClass_FaceClassifier(face, gp_Pnt2d(u, v), tol).State()
+            if state in (TopAbs_IN, TopAbs_ON):
+                best = proj.LowerDistance()
+        return best
 
     def exact_world_box(self, ins):
         """Tight box (BRepBndLib.AddOptimal, no triangulation, no tolerances) of an instance's
@@ -795,18 +838,72 @@ def patchwork_cmd(pw, args, path, gz_plain):
     return r
 
 
-def our_patches(pw, path, plain):
-    r = patchwork_cmd(pw, ["stats"], path, plain)
-    for line in r.stdout.splitlines():
-        if line.startswith("patches"):
-            return int(line.split()[1])
-    return None
+def our_stats(pw, path, plain, T):
+    """`patchwork stats --tolerance T --json`: our own measure of the mesh that `export
+    --tolerance T` writes (the same tessellation), to be set beside the judge's verdict (item 4
+    of issue 29: the measure must fail exactly when the judge does). None if stats fails."""
+    r = patchwork_cmd(pw, ["stats", "--tolerance", repr(T), "--json", "-q", "--faces", "3"], path, plain)
+    if r.returncode != 0:
+        return {"error": (r.stderr.strip().splitlines() or ["?"])[-1]}
+    try:
+        d = json.loads(r.stdout)
+    except ValueError as e:
+        return {"error": "stats printed no JSON (%s)" % e}
+    t = d.get("trimmed") or {}
+    worst = (t.get("worst_faces") or [{}])[0]
+    return {
+        "patches": d.get("patches"),
+        "ratio": t.get("error_ratio", d.get("worst_error_ratio")),
+        "worst_face": ("#%s %s" % (worst["face"], worst["surface"])) if worst else None,
+        "outside": t.get("outside", 0),
+        "skipped": len(d.get("skipped_faces") or []),
+        "budget_stops": d.get("budget_stops", 0),
+    }
+
+
+# A file the judge fails has a sample beyond this many T; `stats` says the same of a file
+# whose trimmed error/eps exceeds it (both bounds allow the T/10 of OCCT's fine mesh).
+AGREE = 1.1
+
+
+def judge_bad(r):
+    """The judge found samples beyond 1.1 T (either direction) or there was no export."""
+    return any(r.get(k) is None or r[k] > AGREE for k in ("a_over_T", "b_over_T"))
+
+
+def stats_bad(r):
+    s = r.get("stats") or {}
+    return "error" in s or s.get("ratio") is None or s["ratio"] > AGREE or s.get("skipped", 0) > 0
+
+
+def print_agreement(rows):
+    """Item 4's table: the judge and `stats` at the same tolerance, on the same files."""
+    rows = [r for r in rows if r.get("stats") is not None]
+    if not rows:
+        return
+    cells = {(False, False): [], (True, True): [], (True, False): [], (False, True): []}
+    for r in rows:
+        cells[(judge_bad(r), stats_bad(r))].append(r)
+    log("agreement of `stats --tolerance T` with the judge (bad: judge > %.1f T; stats trimmed error/eps > %.1f or a "
+        "skipped face): both pass %d, both fail %d, judge only %d, stats only %d" % (
+            AGREE, AGREE, len(cells[(False, False)]), len(cells[(True, True)]), len(cells[(True, False)]),
+            len(cells[(False, True)])))
+    for key, what in (((True, False), "judge only"), ((False, True), "stats only")):
+        for r in cells[key]:
+            s = r["stats"]
+            log("    %s: %s @ rel %g: judge a %s b %s; stats %s" % (
+                what, os.path.basename(r["file"]), r["rel"],
+                "-" if r.get("a_over_T") is None else "%.2f T" % r["a_over_T"],
+                "-" if r.get("b_over_T") is None else "%.2f T" % r["b_over_T"],
+                s.get("error") or "error/eps %.3f (%s), %d outside, %d skipped" % (
+                    s["ratio"] or 0.0, s.get("worst_face"), s.get("outside", 0), s.get("skipped", 0))))
+    return len(cells[(True, False)]) + len(cells[(False, True)])
 
 
 VERIFY = 4000  # exceeding samples per direction checked on the exact B-rep
 
 
-def verify_exact(occt, occt_fine, P, d, idx):
+def verify_exact(occt, occt_fine, P, d, idx, far):
     """Exact distances from the points P[idx] to OCCT's B-rep (the instances whose bounding
     box, grown by the mesh distance, holds the point)."""
     boxes = [(bbox_of(i), i) for i in occt_fine if len(i["V"])]
@@ -816,7 +913,7 @@ def verify_exact(occt, occt_fine, P, d, idx):
         best = np.inf
         for b, ins in boxes:
             if np.all(p >= b[:3] - r) and np.all(p <= b[3:] + r):
-                best = min(best, occt.brep_distance(ins, p))
+                best = min(best, occt.brep_distance(ins, p, far))
         out[n] = best
     return out
 
@@ -877,7 +974,7 @@ def evaluate(occt, ours, rel, T, diag, occt_fine, rng, max_samples, per_tri):
         # exceeding samples on the exact B-rep and keep the exact distance for them.
         over = np.nonzero(da > BOUND * T)[0]
         chk = over[np.argsort(-da[over])[:VERIFY]]
-        ex = verify_exact(occt, occt_fine, Pa, da, chk)
+        ex = verify_exact(occt, occt_fine, Pa, da, chk, 0.1 * T)
         res["a_verified"] = int(len(chk))
         res["a_mesh_over_T"] = res["a_over_T"]
         res["a_false"] = int((ex <= BOUND * T).sum())  # on the B-rep although far from OCCT's mesh
@@ -915,7 +1012,7 @@ def evaluate(occt, ours, rel, T, diag, occt_fine, rng, max_samples, per_tri):
         # mesh artefact and does not count
         over = np.nonzero(db > BOUND * T)[0]
         chk = over[np.argsort(-db[over])[:VERIFY]]
-        ex = verify_exact(occt, occt_fine, Pb, np.full(len(Pb), T), chk)
+        ex = verify_exact(occt, occt_fine, Pb, np.full(len(Pb), T), chk, 0.1 * T)
         bad = chk[ex > 0.5 * T]
         res["b_occt_artefacts"] = int(len(bad))
         db[bad] = 0.0
@@ -967,6 +1064,26 @@ def read_built(brep, names):
     return dict(zip(names, parts))
 
 
+def built_beside(path, workdir):
+    """A kept generated model's parts as OCCT built them: `X.brep.gz` beside `X.step[.gz]`,
+    their names in `X.json` (`built.built_parts`). The shipped reduction is then judged as
+    the generator judged it, not against OCCT's reading of its own STEP (gen-1-78: the read
+    part is 75 mm² short of the part built, a hole where OCCT's reader dropped a face's corner
+    at a vertex 20 off its circle). None when no such file is beside it."""
+    stem = path[:-3] if path.endswith(".gz") else path
+    stem = stem.rsplit(".", 1)[0]
+    brep, recipe = stem + ".brep.gz", stem + ".json"
+    if not (os.path.exists(brep) and os.path.exists(recipe)):
+        return None
+    names = json.load(open(recipe)).get("built", {}).get("built_parts")
+    if not names:
+        return None
+    plain = os.path.join(workdir, os.path.basename(brep)[:-3])
+    with gzip.open(brep, "rb") as fi, open(plain, "wb") as fo:
+        shutil.copyfileobj(fi, fo)
+    return read_built(plain, names)
+
+
 def run_file(path, rels, pw, max_samples, workdir, seed, built=None):
     t0 = time.time()
     rows = []
@@ -982,7 +1099,6 @@ def run_file(path, rels, pw, max_samples, workdir, seed, built=None):
     lo, hi = occt.bbox()
     diag = float(np.linalg.norm(hi - lo))
     nfaces = sum(_count_faces(p["shape"]) for p in occt.protos)
-    patches = our_patches(pw, path, plain)
     t_read = time.time() - t0
     for rel in rels:
         t1 = time.time()
@@ -998,7 +1114,8 @@ def run_file(path, rels, pw, max_samples, workdir, seed, built=None):
             path,
             plain,
         )
-        base = {"file": path, "faces": nfaces, "patches": patches, "diag": diag}
+        stats = our_stats(pw, path, plain, T)
+        base = {"file": path, "faces": nfaces, "patches": stats.get("patches"), "diag": diag, "stats": stats}
         if r.returncode != 0:
             res = dict(base, rel=rel, T=T, fail=["patchwork export failed: " + (r.stderr.strip().splitlines() or ["?"])[-1]])
         else:
@@ -1025,10 +1142,19 @@ def fmt_row(r):
     return [os.path.basename(r["file"]), "%g" % r["rel"], g("T", "%.3g"), g("faces"), g("patches"),
             "%s/%s (%s)" % (g("inst_ours"), g("inst_occt"), g("placements_occt")), g("bbox_mismatch"),
             "%s/%s" % (g("samples_a"), g("samples_b")), g("a_over_T", "%.2f"), g("b_over_T", "%.2f"),
-            g("time", "%.1f"), r.get("status", "?")]
+            stats_cell(r.get("stats")), g("time", "%.1f"), r.get("status", "?")]
 
 
-HEAD = ["file", "rel", "T mm", "faces", "patches", "inst ours/occt (parts)", "bbox bad", "samples a/b", "a/T", "b/T", "s", "status"]
+def stats_cell(s):
+    if s is None:
+        return "-"
+    if "error" in s:
+        return "error"
+    cell = "-" if s.get("ratio") is None else "%.2f" % s["ratio"]
+    return cell + (" (%d skipped)" % s["skipped"] if s.get("skipped") else "")
+
+
+HEAD = ["file", "rel", "T mm", "faces", "patches", "inst ours/occt (parts)", "bbox bad", "samples a/b", "a/T", "b/T", "stats e/eps", "s", "status"]
 
 
 def print_table(rows):
@@ -1167,6 +1293,29 @@ def self_test(args):
         mut = list(coarse)
         mut[k] = dict(ins, V=V)
         results.append(check("move 5%% of the biggest face 3T %s the solid" % way, mut, ["a"]))
+    # (5) the biggest face grown past its border in its own plane (or tangent plane): a sliver
+    # 3T wide on its longest border edge. The exact check's fallback to the face's surface
+    # (_surface_distance) must not take the surface past the face's border for the face.
+    Fk = F[ins["face"] == fid]
+    edges = np.sort(np.concatenate([Fk[:, [0, 1]], Fk[:, [1, 2]], Fk[:, [2, 0]]]), axis=1)
+    uniq, cnt = np.unique(edges, axis=0, return_counts=True)
+    border = uniq[cnt == 1]
+    if len(border):
+        i0, i1 = border[np.argmax(np.linalg.norm(V0[border[:, 1]] - V0[border[:, 0]], axis=1))]
+        tri = Fk[np.nonzero(((Fk == i0) | (Fk == i1)).sum(1) == 2)[0][0]]
+        inner = V0[[x for x in tri if x not in (i0, i1)][0]]
+        a, b = V0[i0], V0[i1]
+        along = (b - a) / np.linalg.norm(b - a)
+        outward = (a - inner) - np.dot(a - inner, along) * along
+        outward /= np.linalg.norm(outward)
+        apex = 0.5 * (a + b) + 3 * T * outward
+        Vg = np.vstack([V0, apex[None]])
+        mut = list(coarse)
+        mut[k] = dict(ins, V=Vg, F=np.vstack([F, [[i0, i1, len(V0)]]]), face=np.append(ins["face"], fid))
+        results.append(check("grow the biggest face 3T past its border", mut, ["a"]))
+    else:
+        log("  grow the biggest face 3T past its border: FAILED (the face has no border edge)")
+        results.append(False)
     # A generated model is judged as built: the round trip that changes seed 7 model 6's
     # sphere face (its hole covered twice when read back, part 1) must be seen.
     sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -1289,7 +1438,10 @@ def judge_generated(args):
                     small = gen.reduce_recipe(rec, fails, log=log)
                     os.makedirs(args.reduce_to, exist_ok=True)
                     out = os.path.join(args.reduce_to, name + ".step")
-                    info2 = gen.build_step(small, out)
+                    info2 = gen.build_step(small, out, out[:-5] + ".brep")
+                    with open(out[:-5] + ".brep", "rb") as fi, gzip.open(out[:-5] + ".brep.gz", "wb") as fo:
+                        shutil.copyfileobj(fi, fo)
+                    os.remove(out[:-5] + ".brep")
                     with open(out[:-5] + ".json", "w") as fh:
                         json.dump(dict(small, built={k: v for k, v in info2.items() if k != "kept"},
                                        failure=bad[0]["fail"]), fh, indent=1)
@@ -1301,6 +1453,7 @@ def judge_generated(args):
     log("")
     print_table(rows)
     log("")
+    disagree = print_agreement(rows)
     log("features judged: %s" % ", ".join("%s %d" % (f, seen.get(f, 0)) for f in gen.FEATURES))
     n = args.generate - len(notbuilt)
     log("occt_fidelity --generate: %d models of seed %d from %d (%d built, %d not built) x %d tolerances in %.1f s: "
@@ -1310,7 +1463,8 @@ def judge_generated(args):
             (" (" + " ".join(knownfail) + ")") if knownfail else ""))
     if args.json:
         with open(args.json, "w") as fh:
-            json.dump({"total_s": total, "rows": rows, "not_built": notbuilt}, fh, indent=1, default=float)
+            json.dump({"total_s": total, "rows": rows, "not_built": notbuilt, "disagreements": disagree}, fh, indent=1,
+                      default=float)
     return 1 if failed else 0
 
 
@@ -1348,7 +1502,10 @@ def main():
     try:
         for f in files:
             log("... %s" % os.path.relpath(f, REPO) if f.startswith(REPO) else f)
-            for r in run_file(os.path.abspath(f), rels, args.patchwork, args.max_samples, work, args.seed):
+            built = built_beside(os.path.abspath(f), work)
+            if built is not None:
+                log("    judged as built: the parts OCCT built are beside it (.brep.gz)")
+            for r in run_file(os.path.abspath(f), rels, args.patchwork, args.max_samples, work, args.seed, built):
                 rows.append(r)
                 log("    rel %g: %s (%.1f s)" % (r["rel"], "; ".join(r["fail"]) or "pass", r["time"]))
     finally:
@@ -1369,6 +1526,7 @@ def main():
     print_table(rows)
     npass = sum(1 for r in rows if not r["fail"])
     log("")
+    disagree = print_agreement(rows)
     nknown = sum(1 for r in rows if r["status"] == "KNOWN")
     log("occt_fidelity: %d files x %d tolerances in %.1f s: %d pass, %d known failures (KNOWN), %d unexpected failures, %d fixed" % (
         len(files), len(rels), total, npass, nknown, unexpected, fixed))
@@ -1376,7 +1534,7 @@ def main():
     log("fidelity: %d passed, %d failed, %d skipped" % (npass, unexpected, nknown))
     if args.json:
         with open(args.json, "w") as fh:
-            json.dump({"total_s": total, "rows": rows}, fh, indent=1, default=float)
+            json.dump({"total_s": total, "rows": rows, "disagreements": disagree}, fh, indent=1, default=float)
     return 1 if unexpected else 0
 
 

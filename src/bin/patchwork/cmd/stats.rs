@@ -11,7 +11,7 @@ use serde_json::{Value, json};
 
 use patchwork::check::fidelity::{FaceFidelity, measure_meshes_with};
 use patchwork::model::{Scene, UpAxis, bounding_box};
-use patchwork::tessellate::{MeshStats, PatchMesh, tessellate_scene};
+use patchwork::tessellate::{MeshStats, PatchMesh, tessellate_scene, tessellate_scene_tolerance};
 use patchwork::view::{Projection, View};
 
 use super::load_built;
@@ -36,6 +36,12 @@ pub struct StatsArgs {
     /// How many of the worst trimmed faces to name (error measured against the trimmed face).
     #[arg(long, default_value_t = 5)]
     faces: usize,
+    /// Tessellate every face to this absolute tolerance instead of the view's pixel error
+    /// (model units: millimetres for STEP), as `export --tolerance` does: the figures then
+    /// speak of the same mesh an exporter writes (tools/occt_fidelity.py --stats compares them
+    /// with Open CASCADE's judgement of that mesh).
+    #[arg(long)]
+    tolerance: Option<f64>,
 }
 
 pub fn run(args: &StatsArgs) -> Result<bool, CliError> {
@@ -49,10 +55,23 @@ fn run_one(args: &StatsArgs, file: &Path) -> Result<Value, CliError> {
     let load_ms = t_load.elapsed().as_secs_f64() * 1e3;
     let camera = args.camera.validate()?;
     let view = camera.view(&scene)?;
+    let tolerance = match args.tolerance {
+        Some(t) if !(t.is_finite() && t > 0.0) => {
+            return Err(CliError::NotPositive {
+                flag: "--tolerance",
+                value: t,
+            });
+        }
+        t => t,
+    };
+    let run = || match tolerance {
+        Some(t) => tessellate_scene_tolerance(&scene, t),
+        None => tessellate_scene(&scene, &view, camera.pixel_error),
+    };
     // Warm-up run (thread pool start), then the timed one.
-    let _ = tessellate_scene(&scene, &view, camera.pixel_error);
+    let _ = run();
     let t0 = Instant::now();
-    let meshes = tessellate_scene(&scene, &view, camera.pixel_error);
+    let meshes = run();
     let dt = t0.elapsed();
     let s = MeshStats::of(&meshes);
     let faces = measure_meshes_with(&scene, &meshes, &super::Bar::default());
@@ -89,7 +108,10 @@ fn run_one(args: &StatsArgs, file: &Path) -> Result<Value, CliError> {
     data!("triangles         {}", s.triangles);
     data!("vertices          {}", s.vertices);
     data!("border vertices   {}", s.border_vertices);
-    data!("pixel error       {} px", camera.pixel_error);
+    match tolerance {
+        Some(t) => data!("tolerance         {t} {unit} (every face; --tolerance)"),
+        None => data!("pixel error       {} px", camera.pixel_error),
+    }
     data!(
         "eps range         {:.3e} .. {:.3e} (object units)",
         s.eps_min,
@@ -119,6 +141,15 @@ fn run_one(args: &StatsArgs, file: &Path) -> Result<Value, CliError> {
             t.face_samples,
             t.uncovered
         );
+        if let Some((n, f)) = t.edges_off {
+            data!(
+                "edges off faces   {n} faces whose own edge curves lie farther than eps off their \
+                 surface, the mesh following the edges (worst: face #{}, {:.4} = {:.3} eps)",
+                f.face,
+                f.edge_offset,
+                f.edge_offset / f.eps.max(f64::MIN_POSITIVE)
+            );
+        }
         for (patch, f) in faces.iter().take(args.faces) {
             data!(
                 "  face #{:<8} {:<9} error/eps {:>7.3}  outside {:>5}  missing/eps {:>7.3}  \
@@ -182,16 +213,22 @@ fn up_name(up: UpAxis) -> &'static str {
 }
 
 /// Totals of the trimmed-face fidelity measure.
-struct Trimmed {
+struct Trimmed<'a> {
     samples: usize,
     outside: usize,
     face_samples: usize,
     uncovered: usize,
+    /// Faces whose edges lie more than ε off their surface: how many, and the worst.
+    edges_off: Option<(usize, &'a FaceFidelity)>,
 }
 
-impl Trimmed {
-    fn of(faces: &[(u32, FaceFidelity)]) -> Trimmed {
+impl Trimmed<'_> {
+    fn of(faces: &[(u32, FaceFidelity)]) -> Trimmed<'_> {
+        let off = || faces.iter().map(|f| &f.1).filter(|f| f.edge_offset > f.eps);
+        let worst =
+            off().max_by(|a, b| (a.edge_offset / a.eps).total_cmp(&(b.edge_offset / b.eps)));
         Trimmed {
+            edges_off: worst.map(|w| (off().count(), w)),
             samples: faces.iter().map(|f| f.1.samples).sum(),
             outside: faces.iter().map(|f| f.1.outside).sum(),
             face_samples: faces.iter().map(|f| f.1.face_samples).sum(),
@@ -227,6 +264,12 @@ fn json_report(
             "outside": t.outside,
             "face_samples": t.face_samples,
             "uncovered": t.uncovered,
+            "edges_off_surface": t.edges_off.map(|(n, f)| json!({
+                "faces": n,
+                "worst_face": f.face,
+                "offset": f.edge_offset,
+                "offset_ratio": f.edge_offset / f.eps.max(f64::MIN_POSITIVE),
+            })),
             "worst_faces": faces.iter().take(args.faces).map(|(patch, f)| json!({
                 "face": f.face,
                 "surface": f.surface,
@@ -251,7 +294,8 @@ fn json_report(
         "triangles": s.triangles,
         "vertices": s.vertices,
         "border_vertices": s.border_vertices,
-        "pixel_error": camera.pixel_error,
+        "pixel_error": args.tolerance.is_none().then_some(camera.pixel_error),
+        "tolerance": args.tolerance,
         "eps_min": s.eps_min,
         "eps_max": s.eps_max,
         "worst_error_ratio": s.worst_error_ratio,
@@ -311,7 +355,7 @@ fn print_memory(scene: &Scene, meshes: &MeshStats) {
     let m = scene.memory();
     let per = |b: usize, n: usize| b as f64 / n.max(1) as f64;
     let mib = |b: usize| b as f64 / (1024.0 * 1024.0);
-    println!(
+    crate::out::outln!(
         "scene memory      {:.1} MiB: {:.0} B/patch (patch structs {:.0}, surfaces {:.0}, other {:.0})",
         mib(m.total()),
         per(m.total(), scene.patches.len()),
@@ -319,18 +363,18 @@ fn print_memory(scene: &Scene, meshes: &MeshStats) {
         per(m.surfaces, scene.patches.len()),
         per(m.other, scene.patches.len())
     );
-    println!(
+    crate::out::outln!(
         "mesh memory       {:.1} MiB: {:.0} B/patch, {:.1} B/triangle (this view's tessellation)",
         mib(meshes.bytes),
         per(meshes.bytes, meshes.patches),
         per(meshes.bytes, meshes.triangles)
     );
     match patchwork::util::peak_rss_bytes() {
-        Some(peak) => println!(
+        Some(peak) => crate::out::outln!(
             "peak RSS          {:.1} MiB (the whole process so far: load, two tessellations, the fidelity check)",
             mib(peak as usize)
         ),
-        None => println!("peak RSS          (not known on this system)"),
+        None => crate::out::outln!("peak RSS          (not known on this system)"),
     }
 }
 
@@ -355,7 +399,9 @@ fn instance_boxes(scene: &Scene, meshes: &[PatchMesh]) -> Vec<Option<(DVec3, DVe
 /// (of the tessellation).
 fn print_parts(scene: &Scene, meshes: &[PatchMesh]) {
     let boxes = instance_boxes(scene, meshes);
-    println!("instances         (index, part, occurrence, shell, translation, world box)");
+    crate::out::outln!(
+        "instances         (index, part, occurrence, shell, translation, world box)"
+    );
     for (i, inst) in scene.instances.iter().enumerate() {
         let part = scene
             .parts
@@ -369,7 +415,7 @@ fn print_parts(scene: &Scene, meshes: &[PatchMesh]) {
                 lo.x, lo.y, lo.z, hi.x, hi.y, hi.z
             )
         });
-        println!(
+        crate::out::outln!(
             "  {i:>4}  {part:<24} {:<24} {shell:<8} ({:.3}, {:.3}, {:.3})  {bbox}",
             if inst.name.is_empty() {
                 "-"
