@@ -31,6 +31,9 @@ pub(super) const LOOSE_UNCERTAINTY_FACTOR: f64 = 10.0;
 /// ... or within this fraction of the edge's chord.
 pub(super) const LOOSE_EDGE_FRACTION: f64 = 0.02;
 
+/// Most edges at one vertex that [`healed_vertex`] weighs.
+const MAX_HEAL_EDGES: usize = 8;
+
 /// The `EDGE_CURVE`s that start or end at each `VERTEX_POINT`: a vertex off its curves is
 /// healed to one point for all of them ([`healed_vertex`]).
 pub(super) type VertexEdges = std::collections::HashMap<u64, Vec<u64>>;
@@ -118,9 +121,12 @@ fn healed_vertex(
     by_vertex: &VertexEdges,
 ) -> Option<DVec3> {
     let near = |c: &Curve3D, p: DVec3| nearest_on_curve(c, p).map(|q| q.distance(p));
+    // A vertex of a real model has a handful of edges; a hostile file's vertex may have
+    // thousands: the first few are enough to place it (the search is quadratic in them).
     let curves: Vec<Curve3D> = by_vertex
         .get(&vertex)?
         .iter()
+        .take(MAX_HEAL_EDGES)
         .filter_map(|e| {
             let (exact, truck, _) = edge_curves(file, table, *e, table.edge_curve.get(e)?).ok()?;
             exact.or(truck.ok())
