@@ -1198,6 +1198,33 @@ fn an_offset_of_a_bspline_is_drawn_at_its_distance() {
     }
 }
 
+/// A generated model whose edges are healed: loaded, nothing skipped, its warnings.
+fn healed_model(path: &str) -> (Scene, String) {
+    let scene = load(&common::root().join(path)).expect("loads");
+    assert!(scene.skipped.is_empty(), "{:?}", scene.skipped);
+    let w = scene.warnings.join("\n");
+    (scene, w)
+}
+
+/// Face `id` of `scene` tessellated by itself at ε = 1e-3 of its radius, and ε.
+fn face_mesh(scene: &Scene, id: u64) -> (patchwork::tessellate::PatchMesh, f64) {
+    use patchwork::tessellate::{PatchMesh, TrimmedTessellator};
+    let face = scene
+        .patches
+        .iter()
+        .find_map(|p| match &p.surface {
+            PatchSurface::Trimmed(f) if f.id == id => Some(f.clone()),
+            _ => None,
+        })
+        .unwrap_or_else(|| panic!("face #{id} is drawn"));
+    let eps = 1e-3 * face.bounds.radius;
+    let mut mesh = PatchMesh::default();
+    TrimmedTessellator::new()
+        .tessellate(&face, eps, &mut mesh)
+        .expect("tessellates");
+    (mesh, eps)
+}
+
 /// gen-1-78 (tools/cad_generator.py seed 1 model 78, reduced): OCCT's offset of a box wrote
 /// edge #2171, a quarter CIRCLE of radius 2.376 at x = 59.978, with its start vertex at
 /// x = 39.91, 20 off the circle. The face it bounds (#2167, the quarter cylinder rounding the
@@ -1206,27 +1233,12 @@ fn an_offset_of_a_bspline_is_drawn_at_its_distance() {
 /// own equation (axis along x through (0, 0, 7.865), radius 2.376), no code shared.
 #[test]
 fn an_edge_whose_vertex_is_off_its_circle_is_healed_and_its_face_drawn() {
-    use patchwork::tessellate::{PatchMesh, TrimmedTessellator};
-    let scene = load(&common::root().join("models/generated/gen-1-78.step.gz")).expect("loads");
-    assert!(scene.skipped.is_empty(), "{:?}", scene.skipped);
-    let w = scene.warnings.join("\n");
+    let (scene, w) = healed_model("models/generated/gen-1-78.step.gz");
     assert!(
         w.contains("healed") && w.contains("#2171 by 2.007e1"),
         "{w}"
     );
-    let face = scene
-        .patches
-        .iter()
-        .find_map(|p| match &p.surface {
-            PatchSurface::Trimmed(f) if f.id == 2167 => Some(f.clone()),
-            _ => None,
-        })
-        .expect("face #2167 is drawn");
-    let eps = 1e-3 * face.bounds.radius;
-    let mut mesh = PatchMesh::default();
-    TrimmedTessellator::new()
-        .tessellate(&face, eps, &mut mesh)
-        .expect("tessellates");
+    let (mesh, eps) = face_mesh(&scene, 2167);
     let (mut x0, mut x1, mut off) = (f32::MAX, f32::MIN, 0.0f32);
     for v in &mesh.positions {
         x0 = x0.min(v.x);
@@ -1631,27 +1643,12 @@ fn a_face_whose_edges_lie_off_its_surface_is_judged_beyond_that_offset() {
 /// sphere stays in its octant — judged by the sphere's own equation, no code shared.
 #[test]
 fn a_vertex_off_two_arcs_is_healed_to_where_they_meet() {
-    use patchwork::tessellate::{PatchMesh, TrimmedTessellator};
-    let scene = load(&common::root().join("models/generated/gen-1-78b.step.gz")).expect("loads");
-    assert!(scene.skipped.is_empty(), "{:?}", scene.skipped);
-    let w = scene.warnings.join("\n");
+    let (scene, w) = healed_model("models/generated/gen-1-78b.step.gz");
     assert!(
         w.contains("#352 by 2.007e1") && w.contains("#2085 by 2.007e1"),
         "{w}"
     );
-    let face = scene
-        .patches
-        .iter()
-        .find_map(|p| match &p.surface {
-            PatchSurface::Trimmed(f) if f.id == 2081 => Some(f.clone()),
-            _ => None,
-        })
-        .expect("face #2081 is drawn");
-    let eps = 1e-3 * face.bounds.radius;
-    let mut mesh = PatchMesh::default();
-    TrimmedTessellator::new()
-        .tessellate(&face, eps, &mut mesh)
-        .expect("tessellates");
+    let (mesh, _) = face_mesh(&scene, 2081);
     let c = glam::Vec3::new(59.978, 0.0, 7.865);
     let slack = 1e-3;
     for v in &mesh.positions {
