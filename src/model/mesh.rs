@@ -168,11 +168,13 @@ pub struct MeshPatch {
 
 impl MeshPatch {
     /// Builds the patch's MT hierarchy ([`crate::mt`]) and reduces it by arc collapses to
-    /// `arc_size` triangles per arc on average (no reduction below 1.5).
+    /// `arc_size` triangles per arc on average (no reduction below 1.5), merging only nodes
+    /// whose errors are within [`crate::mt::MAX_MERGE_ERROR_RATIO`] of each other.
     pub fn build_hierarchy(&mut self, arc_size: f64) {
         self.hierarchy = crate::mt::MtHierarchy::build(&self.positions, &self.triangles);
         if arc_size >= 1.5 {
-            self.hierarchy.reduce(arc_size);
+            self.hierarchy
+                .reduce_within(arc_size, crate::mt::MAX_MERGE_ERROR_RATIO);
         }
     }
 }

@@ -1,7 +1,7 @@
 //! Building an MT hierarchy by half-edge collapses (Holst and Schumann, the
 //! `holst-reduced-mt-hierarchy` paper, section 2): collapses ordered by Garland–Heckbert
-//! quadric error, with heavily weighted constraint planes along the patch border (borders
-//! collapse along themselves; corners turning by more than 45° stay), the link condition,
+//! quadric error, with constraint planes along the patch border (borders collapse along
+//! themselves, corners too: the node error says what that costs), the link condition,
 //! no flipped or degenerate triangles and no collapse that removes every triangle of its
 //! vertex (an ear: its fan would be empty, the removed surface unmeasured). One node per collapse; node error = sampled two-sided
 //! Hausdorff distance between the collapse's fan and the original triangles its region covers,
@@ -19,8 +19,17 @@ use crate::geom::point_triangle_distance;
 use crate::util::IntMap;
 
 /// A symmetric 4×4 quadric.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug)]
 struct Quadric(DMat4);
+
+impl Default for Quadric {
+    /// The zero quadric (no plane). Not `DMat4::default()`, which is glam's identity: every
+    /// vertex then cost 1 + |p|² more, and collapses were ordered by the distance of their
+    /// vertices from the origin rather than by their error.
+    fn default() -> Quadric {
+        Quadric(DMat4::ZERO)
+    }
+}
 
 impl Quadric {
     fn plane(n: DVec3, p: DVec3, weight: f64) -> Quadric {
@@ -165,7 +174,9 @@ impl Builder {
             }
         }
         // Border edges: constraint planes through the edge, perpendicular to the surface,
-        // weighted heavily so the border keeps its line.
+        // weighted as a surface plane of the edge's length squared, so a border collapse is
+        // ordered among the others by what it moves the border (weighted 1e3, border collapses
+        // came last, each inheriting the errors of the coarse interior around it).
         let mut border: Vec<Option<Vec<u32>>> = vec![None; n];
         for tri in triangles {
             let [a, b, c] = tri.map(|i| pos[i as usize]);
@@ -178,7 +189,7 @@ impl Builder {
                 let (pu, pv) = (pos[u as usize], pos[v as usize]);
                 let along = pv - pu;
                 let side = along.cross(normal).normalize_or_zero();
-                let q = Quadric::plane(side, pu, 1e3 * along.length_squared().max(1e-30));
+                let q = Quadric::plane(side, pu, along.length_squared().max(1e-30));
                 for (x, y) in [(u, v), (v, u)] {
                     quadric[x as usize].add(&q);
                     border[x as usize].get_or_insert_with(Vec::new).push(y);
@@ -258,20 +269,15 @@ impl Builder {
     fn candidate(&self, from: u32, to: u32) -> Option<Candidate> {
         let (f, t) = (from as usize, to as usize);
         // Border vertices move only along the border, onto a border neighbour; border
-        // vertices with other than two border edges (corners, non-manifold) stay.
-        if let Some(nb) = &self.border[f] {
-            if nb.len() != 2 || !nb.contains(&to) {
-                return None;
-            }
-            // Corners (the border turns by more than 45°) stay.
-            let (a, b) = (self.pos[nb[0] as usize], self.pos[nb[1] as usize]);
-            let (d0, d1) = (
-                (self.pos[f] - a).normalize_or_zero(),
-                (b - self.pos[f]).normalize_or_zero(),
-            );
-            if d0.dot(d1) < std::f64::consts::FRAC_1_SQRT_2 {
-                return None;
-            }
+        // vertices with other than two border edges (non-manifold) stay. A corner of the border
+        // may go like any other border vertex: the border of a region grown over a mesh's
+        // triangles zigzags, and the node error measures what cutting a corner costs (kept,
+        // corners turning by more than 45° held 10 000 of the bunny's 15 700 border vertices
+        // at every ε).
+        if let Some(nb) = &self.border[f]
+            && (nb.len() != 2 || !nb.contains(&to))
+        {
+            return None;
         }
         // An interior vertex may not move onto the border (it would pinch the patch).
         if self.border[f].is_none() && self.border[t].is_some() {

@@ -30,7 +30,17 @@ impl MtHierarchy {
     /// then have a smaller error than it, which the breadth-first adjustment repairs by raising
     /// it (and what follows it) — the Hausdorff bound of every cut still holds.
     pub fn reduce(&mut self, target: f64) -> usize {
-        Reducer::new(self).run(self, target)
+        Reducer::new(self).run(self, target, f64::INFINITY)
+    }
+
+    /// [`MtHierarchy::reduce`], refusing every arc collapse whose remover's error exceeds its
+    /// creator's by more than the factor `max_error_ratio` (≥ 1): the merged node takes the
+    /// larger error, so each merge delays the finer node's triangles to a coarser ε, and
+    /// unlimited merges to 5 triangles per arc made the bunny's ½-pixel cuts 3–6× larger
+    /// than the unreduced hierarchy's (`examples/mt_breakdown`). Stops where no allowed arc
+    /// is left, below `target` if need be.
+    pub fn reduce_within(&mut self, target: f64, max_error_ratio: f64) -> usize {
+        Reducer::new(self).run(self, target, max_error_ratio.max(1.0))
     }
 }
 
@@ -189,6 +199,8 @@ struct Reducer {
     pred: Vec<SortedSet>,
     version: Vec<u32>,
     mu: f64,
+    /// Largest ratio of the errors of the two nodes an arc collapse may merge.
+    max_ratio: f64,
     /// Triangles in all arcs, and the number of arcs (for the mean arc size).
     arc_triangles: usize,
     /// Depth-first search scratch: nodes seen and the stack.
@@ -246,6 +258,7 @@ impl Reducer {
             succ,
             pred,
             version: vec![0; n],
+            max_ratio: f64::INFINITY,
             seen: Marks::new(n),
             stack: Vec::new(),
             mu: if min_nonzero.is_finite() {
@@ -300,6 +313,9 @@ impl Reducer {
         let size = self.arcs.get(&(c, r))?.tris.len() as f64;
         let e = |n: u32| h.node_error[n as usize].max(self.mu);
         let e_diff = e(r) / e(c);
+        if e_diff.max(1.0 / e_diff) > self.max_ratio {
+            return None;
+        }
         // Arc pairs that merge: common predecessors and common successors of c and r.
         let (mut pairs, mut ps, mut touching) = (0usize, 0usize, 0usize);
         let mut pair = |a: &ArcTriangles, b: &ArcTriangles| {
@@ -348,7 +364,8 @@ impl Reducer {
         self.arc_triangles as f64 / self.arcs.len().max(1) as f64
     }
 
-    fn run(mut self, h: &mut MtHierarchy, target: f64) -> usize {
+    fn run(mut self, h: &mut MtHierarchy, target: f64, max_ratio: f64) -> usize {
+        self.max_ratio = max_ratio;
         let mut heap = BinaryHeap::new();
         let keys: Vec<(u32, u32)> = {
             let mut k: Vec<_> = self.arcs.keys().copied().collect();
@@ -582,8 +599,9 @@ mod tests {
                         0.5 * (b - a).cross(c - a).z.abs()
                     })
                     .sum();
+                // Up to what cutting the square's corners within ε removes.
                 assert!(
-                    (area - 9.0).abs() < 0.02,
+                    (area - 9.0).abs() < 0.02 + eps * 12.0,
                     "{target}: area {area} at ε {eps}"
                 );
                 let worst = sampled_hausdorff(&pos, &cut, &m.triangles);

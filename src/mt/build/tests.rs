@@ -39,20 +39,30 @@ fn every_cut_is_a_triangulation_of_the_patch_within_its_error() {
         assert!(uses.values().all(|&u| u <= 2), "overlap at ε {eps}");
         let loops = border_loops(&cut);
         assert_eq!(loops.len(), 1, "ε {eps}: {} border loops", loops.len());
-        // Corners stay, so the border keeps the square's outline: same length.
+        // The border may cut the square's corners (the node error measures that), but every
+        // vertex of the square's outline stays within the cut's error of the cut's border: what
+        // a fat border of width ε needs to reach the neighbour's.
         let ring = &loops[0];
-        let len: f64 = (0..ring.len())
-            .map(|k| {
-                let a = m.positions[ring[k] as usize].as_dvec3();
-                let b = m.positions[ring[(k + 1) % ring.len()] as usize].as_dvec3();
-                a.distance(b)
-            })
-            .sum();
-        assert!(
-            (len - original_border).abs() < 0.05 * original_border,
-            "border length {len} at ε {eps}"
-        );
-        // Area is kept (a hole would lose some).
+        let outline: Vec<DVec3> = ring
+            .iter()
+            .map(|&v| m.positions[v as usize].as_dvec3())
+            .collect();
+        let original_ring = &border_loops(&m.triangles)[0];
+        for &v in original_ring {
+            let p = m.positions[v as usize].as_dvec3();
+            let d = (0..outline.len())
+                .map(|k| {
+                    let (a, b) = (outline[k], outline[(k + 1) % outline.len()]);
+                    p.distance(crate::geom::closest_point_on_segment(p, a, b))
+                })
+                .fold(f64::INFINITY, f64::min);
+            assert!(
+                d <= 1.1 * achieved + 1e-9,
+                "outline vertex {v} is {d} from the border at ε {eps}"
+            );
+        }
+        // Area is kept up to what cutting corners within ε removes (a hole would lose more
+        // and show as a second border loop above).
         let area: f64 = cut
             .iter()
             .map(|t| {
@@ -62,7 +72,7 @@ fn every_cut_is_a_triangulation_of_the_patch_within_its_error() {
             })
             .sum();
         assert!(
-            (area - 9.0).abs() < 0.02,
+            (area - 9.0).abs() < 0.02 + achieved * original_border,
             "projected area {area} at ε {eps}"
         );
     }
@@ -279,4 +289,113 @@ fn no_valid_collapse_is_left_at_the_coarsest_level() {
             }
         }
     }
+}
+
+/// Triangles the hierarchy of `positions` draws at `eps`.
+fn drawn(positions: &[glam::Vec3], triangles: &[[u32; 3]], eps: f64) -> usize {
+    let mut cut = Vec::new();
+    MtHierarchy::build(positions, triangles).cut(eps, &mut cut);
+    cut.len()
+}
+
+/// Collapses are ordered by their error, not by where the mesh sits: the same bunny patches
+/// moved 40 diagonals away draw the same triangles at the same ε (within rounding). The
+/// quadrics once started at glam's `DMat4::default()`, the identity, which added 1 + |p|² to
+/// every cost: collapses went by distance from the origin, and the bunny drew 3× the
+/// triangles at ε = 0.5 % of its diagonal (24 846 where 7 718 now).
+#[test]
+fn collapse_order_does_not_depend_on_where_the_mesh_sits() {
+    let patches = bunny_patches(1500);
+    let shift = glam::Vec3::new(60.0, -80.0, 40.0);
+    let (mut here, mut there) = (0usize, 0usize);
+    for p in patches.iter().step_by(patches.len() / 6).take(6) {
+        let moved: Vec<glam::Vec3> = p.positions.iter().map(|&v| v + shift).collect();
+        // ε = 0.5 % of the bunny's diagonal (2.6).
+        here += drawn(&p.positions, &p.triangles, 0.013);
+        there += drawn(&moved, &p.triangles, 0.013);
+    }
+    let ratio = there as f64 / here as f64;
+    assert!(
+        (0.95..=1.05).contains(&ratio),
+        "{here} triangles in place, {there} moved ({ratio:.3}×)"
+    );
+}
+
+/// A flat patch whose border is a staircase (as a region grown over a mesh's triangles is)
+/// loses its stairs once ε is past their size: corners of the border collapse when the node
+/// error allows, and what is drawn stays within the original outline by about that error.
+/// With corners turning by more than 45° kept, every stair stayed at every ε (seen failing:
+/// 26 of 48 border vertices left at ε = 4).
+#[test]
+fn a_staircase_border_simplifies_within_its_error() {
+    // Unit squares (two triangles each, split along the diagonal that leaves no stair corner
+    // in a triangle of its own: such an ear is never collapsed) below the staircase j ≤ i of
+    // a 12 × 12 grid.
+    let n = 12u32;
+    let at = |i: u32, j: u32| j * (n + 1) + i;
+    let positions: Vec<glam::Vec3> = (0..=n)
+        .flat_map(|j| (0..=n).map(move |i| glam::Vec3::new(i as f32, j as f32, 0.0)))
+        .collect();
+    let mut triangles = Vec::new();
+    for j in 0..n {
+        for i in j..n {
+            triangles.push([at(i, j), at(i + 1, j), at(i, j + 1)]);
+            triangles.push([at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)]);
+        }
+    }
+    let h = MtHierarchy::build(&positions, &triangles);
+    let mut cut = Vec::new();
+    // Four stairs. (At one stair, 1.0, the stairs should go too, but the flat plane's first
+    // collapses along its straight bottom border already measure 1.0–4.0: an original
+    // triangle is covered by the fan triangle nearest its centroid, not the one it lies in, so
+    // the next fan is measured against originals that do not fill its area. Issue 30 item 3.)
+    let eps = 4.0;
+    let achieved = h.cut(eps, &mut cut);
+    let loops = border_loops(&cut);
+    assert_eq!(loops.len(), 1, "{} border loops", loops.len());
+    let original = border_loops(&triangles)[0].len();
+    assert!(
+        loops[0].len() * 3 < original,
+        "{} of {original} border vertices left at ε {eps}",
+        loops[0].len()
+    );
+    let pos: Vec<DVec3> = positions.iter().map(|v| v.as_dvec3()).collect();
+    let dense = dense_hausdorff(&pos, &cut, &triangles, 8);
+    assert!(
+        dense <= achieved * BUNNY_SHORTFALL + 1e-9,
+        "dense Hausdorff {dense} beyond the cut's error {achieved}"
+    );
+}
+
+/// Arc collapse merges a node into one of larger error, which delays the finer node's
+/// triangles to a coarser ε. Merging only nodes within `MAX_MERGE_ERROR_RATIO` of each other
+/// keeps the bunny's cuts near the unreduced hierarchy's (1.4× over all its patches at 0.5 %
+/// of the diagonal); Holst's unlimited reduction to 5 triangles per arc drew 5×.
+#[test]
+fn reduction_within_an_error_ratio_keeps_cuts_small() {
+    let patches = bunny_patches(1500);
+    let (mut built, mut within, mut unlimited) = (0usize, 0usize, 0usize);
+    let mut cut = Vec::new();
+    for p in patches.iter().step_by(patches.len() / 6).take(6) {
+        let h = MtHierarchy::build(&p.positions, &p.triangles);
+        let mut a = h.clone();
+        a.reduce_within(
+            crate::mt::DEFAULT_ARC_SIZE,
+            crate::mt::MAX_MERGE_ERROR_RATIO,
+        );
+        let mut b = h.clone();
+        b.reduce(crate::mt::DEFAULT_ARC_SIZE);
+        for (sum, h) in [(&mut built, &h), (&mut within, &a), (&mut unlimited, &b)] {
+            h.cut(0.013, &mut cut);
+            *sum += cut.len();
+        }
+    }
+    assert!(
+        (within as f64) <= 1.6 * built as f64,
+        "{within} triangles reduced within the ratio, {built} unreduced"
+    );
+    assert!(
+        unlimited > 2 * within,
+        "unlimited reduction drew {unlimited}, within the ratio {within}: the limit is not seen"
+    );
 }
