@@ -9,7 +9,7 @@
 
 use std::collections::HashSet;
 
-use patchwork::model::mesh::MeshPatch;
+use patchwork::model::mesh::{MeshPatch, border_loops};
 use patchwork::mt::{DEFAULT_ARC_SIZE, MAX_MERGE_ERROR_RATIO, MtHierarchy};
 use rayon::prelude::*;
 
@@ -23,21 +23,11 @@ struct Count {
     seam_vertices: usize,
 }
 
-/// The vertices on an edge used once, and those of them on the patch's border loops.
-fn classify(p: &MeshPatch) -> (HashSet<u32>, HashSet<u32>) {
-    let mut uses = std::collections::HashMap::new();
-    for t in &p.triangles {
-        for k in 0..3 {
-            let (a, b) = (t[k], t[(k + 1) % 3]);
-            *uses.entry((a.min(b), a.max(b))).or_insert(0) += 1;
-        }
-    }
-    let open: HashSet<u32> = uses
-        .iter()
-        .filter(|(_, n)| **n == 1)
-        .flat_map(|(e, _)| [e.0, e.1])
-        .collect();
-    let border: HashSet<u32> = p.borders.iter().flatten().copied().collect();
+/// The vertices on an edge used once (the loops of `model::mesh::border_loops`), and those of
+/// them on the patch's own border loops (`borders`).
+fn classify(triangles: &[[u32; 3]], borders: &[Vec<u32>]) -> (HashSet<u32>, HashSet<u32>) {
+    let open = border_loops(triangles).into_iter().flatten().collect();
+    let border = borders.iter().flatten().copied().collect();
     (open, border)
 }
 
@@ -113,7 +103,10 @@ fn main() {
     mesh.weld();
     let parts: Vec<MeshPatch> =
         patchwork::prep::partition(&mesh, patchwork::prep::DEFAULT_PATCH_TRIANGLES);
-    let classes: Vec<(HashSet<u32>, HashSet<u32>)> = parts.iter().map(classify).collect();
+    let classes: Vec<(HashSet<u32>, HashSet<u32>)> = parts
+        .iter()
+        .map(|p| classify(&p.triangles, &p.borders))
+        .collect();
     let built: Vec<MtHierarchy> = parts
         .par_iter()
         .map(|p| MtHierarchy::build(&p.positions, &p.triangles))
@@ -126,18 +119,8 @@ fn main() {
             h
         })
         .collect();
-    let whole_positions = mesh.positions.clone();
-    let whole = MtHierarchy::build(&whole_positions, &mesh.triangles);
-    let whole_patch = MeshPatch {
-        positions: whole_positions,
-        normals: Vec::new(),
-        triangles: mesh.triangles.clone(),
-        borders: Vec::new(),
-        source_triangles: Vec::new(),
-        source_vertices: Vec::new(),
-        hierarchy: MtHierarchy::default(),
-    };
-    let whole_class = classify(&whole_patch);
+    let whole = MtHierarchy::build(&mesh.positions, &mesh.triangles);
+    let whole_class = classify(&mesh.triangles, &[]);
     let (lo, hi) = patchwork::model::bounding_box(mesh.positions.iter().map(|v| v.as_dvec3()))
         .unwrap_or_default();
     let diagonal = lo.distance(hi);
@@ -146,11 +129,10 @@ fn main() {
         .map(|(o, b)| (o.len(), b.len()))
         .fold((0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
     println!(
-        "{path}: {} triangles, {} vertices ({} positions), {} patches; patch vertices on an \
+        "{path}: {} triangles, {} vertices, {} patches; patch vertices on an \
          open edge {open}, of them on border loops {border}; whole mesh: {} vertices on an \
          open edge (seams)",
         mesh.triangles.len(),
-        mesh.positions.len(),
         mesh.positions.len(),
         parts.len(),
         whole_class.0.len()
