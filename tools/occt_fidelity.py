@@ -1381,6 +1381,22 @@ def build_isolated(gen, rec, step):
     raise RuntimeError("building the model failed: " + value)
 
 
+def keep_generated(step, keep, name, rec, info, why):
+    """Copies a generated model that failed or on which `stats` disagreed with the judge, as
+    OCCT built it this time, to KEEP: its STEP and its parts (gzipped) and its recipe with the
+    names of the parts built (`.json`, what `built_beside` reads), so that the corpus run
+    judges it as built. OCCT does not build every recipe identically run to run (gen-1-78's
+    stats-only disagreement came back in 1 of 6 builds), so the input is kept while it exists."""
+    os.makedirs(keep, exist_ok=True)
+    for src, dst in ((step, name + ".step.gz"), (step + ".brep", name + ".brep.gz")):
+        if os.path.exists(src):
+            with open(src, "rb") as fi, gzip.open(os.path.join(keep, dst), "wb") as fo:
+                shutil.copyfileobj(fi, fo)
+    with open(os.path.join(keep, name + ".json"), "w") as fh:
+        json.dump(dict(rec, built={k: v for k, v in info.items() if k != "kept"}, failure=why), fh, indent=1)
+    log("    kept as built this time: %s" % os.path.join(keep, name + ".step.gz"))
+
+
 def judge_generated(args):
     """Build models of the seeded generator and judge each like a file; a failing model is
     reduced (cad_generator.reduce_recipe) when --reduce-to is given. Exit 1 on any failure."""
@@ -1419,6 +1435,12 @@ def judge_generated(args):
                 seen[f] = seen.get(f, 0) + 1
             bad = [r for r in res if r["fail"]]
             listed = name + ".step" in known
+            why = [f for r in res for f in r["fail"]] + [
+                "stats only: error/eps %.3f (%s)" % (r["stats"].get("ratio") or 0.0, r["stats"].get("worst_face"))
+                for r in res if r.get("stats") is not None and stats_bad(r) and not judge_bad(r)] + [
+                "judge only" for r in res if r.get("stats") is not None and judge_bad(r) and not stats_bad(r)]
+            if args.keep and why:
+                keep_generated(os.path.join(work, name + ".step"), args.keep, name, rec, info, why)
             for r in res:
                 r["file"] = name + ".step"
                 r["features"] = fs
@@ -1494,6 +1516,9 @@ def main():
     ap.add_argument("--reduce-to", metavar="DIR",
                     help="with --generate: reduce each failing model to the smallest recipe that still fails and keep "
                          "it in DIR as gen-SEED-INDEX.step with its recipe (.json)")
+    ap.add_argument("--keep", metavar="DIR",
+                    help="with --generate: copy every model that fails or on which stats disagrees with the judge, "
+                         "as OCCT built it this time (STEP and parts, gzipped), to DIR")
     ap.add_argument("--require-agreement", action="store_true",
                     help="exit 1 when `stats --tolerance T` disagrees with the judge on a file not listed in "
                          "--known-failures (its trimmed error/eps above 1.1, or a skipped face, exactly when the "

@@ -340,7 +340,10 @@ pub fn measure(
             }
         }
     }
-    cover(face, &boundary, positions, triangles, eps, &mut out);
+    let allowance: Vec<f64> = vertex_off.iter().map(|o| o.unwrap_or(0.0)).collect();
+    cover(
+        face, &boundary, positions, triangles, &allowance, eps, &mut out,
+    );
     Some(out)
 }
 
@@ -363,12 +366,18 @@ fn edge_offset(face: &TrimmedFace, boundary: &Boundary, p: DVec3, eps: f64) -> f
         .unwrap_or(0.0)
 }
 
-/// The face's own samples against the mesh: [`FaceFidelity::missing`].
+/// The face's own samples against the mesh: [`FaceFidelity::missing`]. Where the face's own
+/// edge curves lie off its surface (`allowance`: each mesh vertex's distance from the surface
+/// where it lies on them, 0 elsewhere), the mesh follows the edges, and a sample is judged
+/// beyond that offset interpolated at its nearest mesh point — as the mesh's own samples are
+/// judged beyond it in the other direction (gen-1-78c: a cylinder face whose edges lie 11.6 ε
+/// off it read 1.127 ε missing where OCCT's judge, against the parts as built, found 0.73 T).
 fn cover(
     face: &TrimmedFace,
     boundary: &Boundary,
     positions: &[DVec3],
     triangles: &[[u32; 3]],
+    allowance: &[f64],
     eps: f64,
     out: &mut FaceFidelity,
 ) {
@@ -392,7 +401,7 @@ fn cover(
     } else {
         (nu, nv)
     };
-    let grid = TriangleGrid::new(positions, triangles);
+    let grid = TriangleGrid::new(positions, triangles, allowance);
     for i in 0..nu {
         for j in 0..nv {
             let uv = lo
@@ -421,6 +430,12 @@ fn cover(
 struct TriangleGrid<'a> {
     positions: &'a [DVec3],
     triangles: &'a [[u32; 3]],
+    /// Per vertex, how much farther a point may lie from the mesh there (interpolated over
+    /// each triangle); empty or all 0: plain distances.
+    allowance: &'a [f64],
+    /// The largest allowance: an untested triangle beyond a bound may still come this much
+    /// nearer.
+    max_allowance: f64,
     lo: DVec3,
     cell: f64,
     dims: [usize; 3],
@@ -433,7 +448,11 @@ impl<'a> TriangleGrid<'a> {
     /// Most cells per axis.
     const MAX_DIM: usize = 32;
 
-    fn new(positions: &'a [DVec3], triangles: &'a [[u32; 3]]) -> TriangleGrid<'a> {
+    fn new(
+        positions: &'a [DVec3],
+        triangles: &'a [[u32; 3]],
+        allowance: &'a [f64],
+    ) -> TriangleGrid<'a> {
         let corners = |t: &[u32; 3]| t.map(|i| positions[i as usize]);
         let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
         for t in triangles {
@@ -457,9 +476,16 @@ impl<'a> TriangleGrid<'a> {
         } else {
             [1, 1, 1]
         };
+        let max_allowance = allowance
+            .iter()
+            .copied()
+            .filter(|a| a.is_finite())
+            .fold(0.0, f64::max);
         let mut grid = TriangleGrid {
             positions,
             triangles,
+            allowance,
+            max_allowance,
             lo: if lo.is_finite() { lo } else { DVec3::ZERO },
             cell,
             dims,
@@ -526,12 +552,33 @@ impl<'a> TriangleGrid<'a> {
         (c[0] * self.dims[1] + c[1]) * self.dims[2] + c[2]
     }
 
+    /// Distance from `q` to triangle `t`, less the allowance interpolated at its nearest point
+    /// (never below 0).
     fn triangle_distance(&self, q: DVec3, t: u32) -> f64 {
-        let [a, b, c] = self.triangles[t as usize].map(|i| self.positions[i as usize]);
-        crate::geom::point_triangle_distance(q, a, b, c)
+        let tri = self.triangles[t as usize];
+        let [a, b, c] = tri.map(|i| self.positions[i as usize]);
+        let given = tri.map(|i| self.allowance.get(i as usize).copied().unwrap_or(0.0));
+        if given.iter().all(|&g| g <= 0.0 || !g.is_finite()) {
+            return crate::geom::point_triangle_distance(q, a, b, c);
+        }
+        let p = crate::geom::closest_point_on_triangle(q, a, b, c);
+        // Barycentric coordinates of p; a degenerate triangle gets its smallest allowance.
+        let (v0, v1, v2) = (b - a, c - a, p - a);
+        let (d00, d01, d11) = (v0.dot(v0), v0.dot(v1), v1.dot(v1));
+        let (d20, d21) = (v2.dot(v0), v2.dot(v1));
+        let den = d00 * d11 - d01 * d01;
+        let allowed = if den > 1e-300 {
+            let v = ((d11 * d20 - d01 * d21) / den).clamp(0.0, 1.0);
+            let w = ((d00 * d21 - d01 * d20) / den).clamp(0.0, 1.0);
+            let u = (1.0 - v - w).max(0.0);
+            given[0] * u + given[1] * v + given[2] * w
+        } else {
+            given.iter().copied().fold(f64::INFINITY, f64::min)
+        };
+        (q.distance(p) - allowed.max(0.0)).max(0.0)
     }
 
-    /// Distance from `q` to the nearest triangle: cells in rings around `q`'s cell until no
+    /// Distance from `q` to the nearest triangle (less its allowance): cells in rings around `q`'s cell until no
     /// triangle outside the rings can be nearer.
     fn distance(&self, q: DVec3) -> f64 {
         let c = self.cell_of(q);
@@ -572,7 +619,7 @@ impl<'a> TriangleGrid<'a> {
                     bound = bound.min(self.lo[i] + (b + 1) as f64 * self.cell - q[i]);
                 }
             }
-            if best <= bound.max(0.0) || bound == f64::INFINITY {
+            if best <= (bound - self.max_allowance).max(0.0) || bound == f64::INFINITY {
                 return best;
             }
         }
