@@ -3,9 +3,12 @@
 //! quadric error, with constraint planes along the patch border (borders collapse along
 //! themselves, corners too: the node error says what that costs), the link condition,
 //! no flipped or degenerate triangles and no collapse that removes every triangle of its
-//! vertex (an ear: its fan would be empty, the removed surface unmeasured). One node per collapse; node error = sampled two-sided
-//! Hausdorff distance between the collapse's fan and the original triangles its region covers,
-//! maxed with the errors of the nodes whose triangles it removes (monotone along the DAG).
+//! vertex (an ear: its fan would be empty, the removed surface unmeasured). One node per
+//! collapse; node error = a certified upper bound ([`super::bound`], [`Builder::measure`]) of
+//! the two-sided Hausdorff distance between the collapse's fan and the original surface —
+//! original → fan against the one fan triangle each piece of the surface is given to, fan →
+//! original against the surface around it — maxed with the errors of the nodes whose
+//! triangles it removes (monotone along the DAG), so every cut is within its ε both ways.
 //!
 //! It does not reduce the hierarchy (that is [`super::reduce`]) nor cut it ([`super::cut`]).
 
@@ -14,6 +17,7 @@ use std::collections::BinaryHeap;
 
 use glam::{DMat4, DVec3, DVec4, Vec3};
 
+use super::bound::{self, Piece};
 use super::{MtHierarchy, NEVER};
 use crate::geom::point_triangle_distance;
 use crate::util::IntMap;
@@ -87,16 +91,16 @@ fn outside(p: DVec3, (centre, radius): (DVec3, f64), d: f64) -> bool {
     p.distance_squared(centre) > reach * reach
 }
 
-/// A sphere around a triangle: its centroid and the distance to the farthest corner (the
-/// triangle is the convex hull of its corners, so no point of it is farther).
-fn sphere([a, b, c]: [DVec3; 3]) -> (DVec3, f64) {
-    let centre = (a + b + c) / 3.0;
-    let radius = [a, b, c]
-        .iter()
-        .map(|p| p.distance(centre))
-        .fold(0.0, f64::max);
-    (centre, radius)
-}
+/// How far above the largest sampled distance (or inherited error) a certified bound may
+/// be taken as it is, relative, before the piece it bounds is split to tighten it.
+const SLACK: f64 = 0.2;
+
+/// How many times a piece of the original surface may be split (each split kept: at most
+/// 4^3 pieces per original triangle).
+const PIECE_DEPTH: u8 = 3;
+
+/// How many times a fan triangle may be split while it is bounded (the parts are not kept).
+const FAN_DEPTH: u8 = 6;
 
 impl MtHierarchy {
     /// Builds the hierarchy of a patch (`positions`, `triangles`), collapsing until no valid
@@ -112,14 +116,22 @@ struct Builder {
     created_by: Vec<u32>,
     removed_by: Vec<u32>,
     node_error: Vec<f64>,
-    /// Original triangles each live triangle stands for.
+    /// Pieces of the original surface each live triangle stands for (see [`Builder::measure`]).
     covers: Vec<Vec<u32>>,
+    /// Pieces of the original surface: the original triangles first, then the parts of
+    /// those split to tighten a bound, with a sphere around each and how many splits below
+    /// its original triangle it is.
+    pieces: Vec<Piece>,
+    piece_spheres: Vec<(DVec3, f64)>,
+    piece_depth: Vec<u8>,
+    /// The original triangle each piece is part of.
+    piece_origin: Vec<u32>,
     /// Every triangle's corners, and a sphere around it (centroid, radius): distances are
     /// measured without looking up vertices, and a sphere far from a point skips the exact
     /// distance (see [`Builder::beyond`]).
     corners: Vec<[DVec3; 3]>,
     spheres: Vec<(DVec3, f64)>,
-    /// A sphere around the original triangles each triangle covers (all of them).
+    /// A sphere around the pieces each triangle covers (all of them).
     cover_spheres: Vec<(DVec3, f64)>,
     /// Live triangles around each vertex.
     around: Vec<Vec<u32>>,
@@ -141,7 +153,16 @@ struct Builder {
     scratch_fan: Vec<u32>,
     scratch_region: Vec<u32>,
     scratch_groups: Vec<Group>,
-    scratch_assigned: Vec<u32>,
+    scratch_assigned: Vec<(u32, u32, f64)>,
+    scratch_cands: Vec<u32>,
+    scratch_cand_groups: Vec<Group>,
+    scratch_ring: Vec<u32>,
+    scratch_pieces: Vec<(u32, u32)>,
+    scratch_parts: Vec<Piece>,
+    scratch_fan_pieces: Vec<(Piece, u8, Option<u32>)>,
+    scratch_near: Vec<u32>,
+    scratch_originals: Vec<(Piece, [u32; 3])>,
+    scratch_edges3: Vec<bound::Edge>,
     /// Emptied cover lists of removed triangles, reused by new ones.
     spare_covers: Vec<Vec<u32>>,
 }
@@ -201,8 +222,12 @@ impl Builder {
             .iter()
             .map(|t| t.map(|i| pos[i as usize]))
             .collect();
-        let spheres: Vec<(DVec3, f64)> = corners.iter().map(|&c| sphere(c)).collect();
+        let spheres: Vec<(DVec3, f64)> = corners.iter().map(bound::sphere).collect();
         Builder {
+            pieces: corners.clone(),
+            piece_spheres: spheres.clone(),
+            piece_depth: vec![0; m],
+            piece_origin: (0..m as u32).collect(),
             corners,
             cover_spheres: spheres.clone(),
             spheres,
@@ -228,6 +253,15 @@ impl Builder {
             scratch_region: Vec::new(),
             scratch_groups: Vec::new(),
             scratch_assigned: Vec::new(),
+            scratch_cands: Vec::new(),
+            scratch_cand_groups: Vec::new(),
+            scratch_ring: Vec::new(),
+            scratch_pieces: Vec::new(),
+            scratch_parts: Vec::new(),
+            scratch_fan_pieces: Vec::new(),
+            scratch_near: Vec::new(),
+            scratch_originals: Vec::new(),
+            scratch_edges3: Vec::new(),
             spare_covers: Vec::new(),
         }
     }
@@ -472,9 +506,9 @@ impl Builder {
             self.tris.push(new);
             let corners = new.map(|i| self.pos[i as usize]);
             self.corners.push(corners);
-            self.spheres.push(sphere(corners));
+            self.spheres.push(bound::sphere(&corners));
             // Set when the fan's covers are known (`measure`).
-            self.cover_spheres.push(sphere(corners));
+            self.cover_spheres.push(bound::sphere(&corners));
             self.created_by.push(node);
             self.removed_by.push(NEVER);
             self.covers
@@ -504,14 +538,14 @@ impl Builder {
                 }
             }
         }
-        let error = self.measure(&fan, &region, &groups);
+        let error = self.measure(&fan, &region, &groups, inherited);
         self.node_error.push(error.max(inherited));
         for &t in &fan {
             let centre = self.spheres[t as usize].0;
             let radius = self.covers[t as usize]
                 .iter()
                 .map(|&o| {
-                    let (c, r) = self.spheres[o as usize];
+                    let (c, r) = self.piece_spheres[o as usize];
                     c.distance(centre) + r
                 })
                 .fold(0.0, f64::max);
@@ -524,108 +558,318 @@ impl Builder {
         self.scratch_fan = fan;
     }
 
+    /// Distance from `p` to the live or fan triangle `t`.
     fn dist(&self, p: DVec3, t: u32) -> f64 {
         let [a, b, c] = self.corners[t as usize];
         point_triangle_distance(p, a, b, c)
     }
 
-    /// Whether triangle `t` is certainly farther than `d` from `p` (its bounding sphere is):
-    /// then `dist(p, t)` cannot lower a minimum that is `d` already. The margin (relative
-    /// 1e-9) keeps rounding from skipping a triangle at the same distance.
-    fn beyond(&self, p: DVec3, t: u32, d: f64) -> bool {
-        outside(p, self.spheres[t as usize], d)
+    /// Distance from `p` to the piece of the original surface `o`.
+    fn piece_dist(&self, p: DVec3, o: u32) -> f64 {
+        let [a, b, c] = self.pieces[o as usize];
+        point_triangle_distance(p, a, b, c)
     }
 
-    /// Sampled two-sided Hausdorff distance between the triangles `fan` and the original
-    /// triangles `region` (every triangle sampled at [`samples`]), assigning every original
-    /// triangle to the fan triangle nearest its centroid (the first of equally near ones).
+    /// Whether piece `o` is certainly farther than `d` from `p`.
+    fn piece_beyond(&self, p: DVec3, o: u32, d: f64) -> bool {
+        outside(p, self.piece_spheres[o as usize], d)
+    }
+
+    /// A new piece of the original surface, `depth` splits below an original triangle.
+    fn add_piece(&mut self, piece: Piece, depth: u8, origin: u32) -> u32 {
+        let id = self.pieces.len() as u32;
+        self.pieces.push(piece);
+        self.piece_spheres.push(bound::sphere(&piece));
+        self.piece_depth.push(depth);
+        self.piece_origin.push(origin);
+        id
+    }
+
+    /// The error of a collapse: a certified upper bound of the two-sided Hausdorff distance
+    /// between the triangles `fan` and the original surface, no lower than `inherited`
+    /// (see [`bound`] for the two facts it rests on).
     ///
-    /// Exact for those samples, and fast. The outcome, the largest over all samples of the
-    /// distance to the other set, does not depend on the order the samples are visited in,
-    /// so the cheap ones go first and raise `worst` early: the centroids (their distance
-    /// comes with the assignment), then the fan's samples, then the rest of the originals'.
-    /// A sample stops scanning as soon as it finds a triangle no farther than `worst` (it
-    /// cannot raise the maximum), looking first where that is likely (an original's assigned
-    /// fan triangle, a fan triangle's assigned originals); a triangle or a group of originals
-    /// whose bounding sphere is beyond the nearest so far is skipped; an original triangle
-    /// whose three corners are within `worst` of its assigned fan triangle is not sampled
-    /// further (distance to one triangle is convex, so the whole triangle is that near).
-    fn measure(&mut self, fan: &[u32], region: &[u32], groups: &[Group]) -> f64 {
-        let mut worst = 0.0f64;
+    /// - **Original → fan**, against one triangle: every piece of the original surface in
+    ///   `region` is given to the fan triangle whose farthest point from it is nearest
+    ///   ([`bound::farthest_corner`], exact by convexity) and stays in its cover until that
+    ///   triangle is removed, so every cut holding the triangle holds the bound. A piece
+    ///   whose bound is loose is split along the side of its triangle that it overhangs
+    ///   (kept split, at most [`PIECE_DEPTH`] times).
+    /// - **Fan → original**, against the original surface near it (the region's pieces and
+    ///   those covered by the live triangles around the fan): every fan triangle is bounded
+    ///   by the convex bound against the one nearest piece, or the corners' distances plus
+    ///   the Lipschitz term; where loose it is split (along the side of that piece, at most
+    ///   [`FAN_DEPTH`] times) and bounded part by part.
+    ///
+    /// "Loose" means above `(1 + `[`SLACK`]`)` times the largest of `inherited` and the
+    /// sampled distances ([`Builder::sample_lower`], true distances at points, so a lower
+    /// bound): a bound within that is taken as it is. What is returned is never below the
+    /// true distance; it is above it by at most `SLACK` except where a depth limit stopped.
+    fn measure(&mut self, fan: &[u32], region: &[u32], groups: &[Group], inherited: f64) -> f64 {
         let mut assigned = std::mem::take(&mut self.scratch_assigned);
         assigned.clear();
+        let mut lower = 0.0f64;
         for &o in region {
-            let [a, b, c] = self.corners[o as usize];
-            let centroid = (a + b + c) / 3.0;
-            let mut nearest: Option<(u32, f64)> = None;
-            for &t in fan {
-                if nearest.is_some_and(|(_, best)| self.beyond(centroid, t, best)) {
+            let (at, bound, near) = self.nearest_fan_triangle(fan, o);
+            lower = lower.max(near);
+            self.covers[at as usize].push(o);
+            assigned.push((o, at, bound));
+        }
+        // The pieces covered by the live triangles around the fan: original surface near the
+        // fan, as true a target for the fan → original distance as the region's own.
+        let mut cands = std::mem::take(&mut self.scratch_cands);
+        let mut cand_groups = std::mem::take(&mut self.scratch_cand_groups);
+        cands.clear();
+        cands.extend_from_slice(region);
+        cand_groups.clear();
+        cand_groups.extend_from_slice(groups);
+        let mut ring = std::mem::take(&mut self.scratch_ring);
+        ring.clear();
+        let first_fan = fan.first().copied().unwrap_or(u32::MAX);
+        for &t in fan {
+            for v in self.tris[t as usize] {
+                ring.extend(self.around[v as usize].iter().filter(|&&r| r < first_fan));
+            }
+        }
+        ring.sort_unstable();
+        ring.dedup();
+        for &r in &ring {
+            let start = cands.len() as u32;
+            cands.extend_from_slice(&self.covers[r as usize]);
+            cand_groups.push(Group {
+                start,
+                end: cands.len() as u32,
+                sphere: self.cover_spheres[r as usize],
+            });
+        }
+        lower = self.sample_lower(fan, &cands, &cand_groups, lower);
+        // `lower`: true distances found (the collapse's own error is at least that); `worst`:
+        // the bound so far. A bound within `limit` is taken as it is; slack is allowed over
+        // the collapse's own distances only, not over the inherited error (it would compound
+        // from node to node up the DAG: 1.2 allowed over it drew 2–4× the bunny's triangles).
+        let mut worst = lower.max(inherited);
+        let limit = |worst: f64, lower: f64| worst.max(lower * (1.0 + SLACK));
+        // Original → fan: the loose pieces split, the rest kept where assigned.
+        for &t in fan {
+            self.covers[t as usize].clear();
+        }
+        let mut stack = std::mem::take(&mut self.scratch_pieces);
+        stack.clear();
+        for &(o, at, bound) in &assigned {
+            if bound <= limit(worst, lower) || self.piece_depth[o as usize] >= PIECE_DEPTH {
+                self.covers[at as usize].push(o);
+                worst = worst.max(bound);
+            } else {
+                stack.push((o, at));
+            }
+        }
+        let mut parts = std::mem::take(&mut self.scratch_parts);
+        while let Some((o, at)) = stack.pop() {
+            parts.clear();
+            let piece = self.pieces[o as usize];
+            let tri = self.corners[at as usize];
+            bound::split(&piece, Some(&tri), &mut parts);
+            let depth = self.piece_depth[o as usize] + 1;
+            for &part in &parts {
+                let id = self.add_piece(part, depth, self.piece_origin[o as usize]);
+                let (at, bound, near) = self.nearest_fan_triangle(fan, id);
+                lower = lower.max(near);
+                worst = worst.max(near);
+                if bound <= limit(worst, lower) || depth >= PIECE_DEPTH {
+                    self.covers[at as usize].push(id);
+                    worst = worst.max(bound);
+                } else {
+                    stack.push((id, at));
+                }
+            }
+        }
+        // Fan → original.
+        let mut todo = std::mem::take(&mut self.scratch_fan_pieces);
+        for &t in fan {
+            if let Some(bound) = self.height_bound(t)
+                && bound <= limit(worst, lower)
+            {
+                worst = worst.max(bound);
+                continue;
+            }
+            todo.clear();
+            todo.push((
+                self.corners[t as usize],
+                0u8,
+                self.covers[t as usize].first().copied(),
+            ));
+            while let Some((piece, depth, hint)) = todo.pop() {
+                let (bound, nearest, near) =
+                    self.bound_piece(&piece, &cands, &cand_groups, worst, hint);
+                lower = lower.max(near);
+                worst = worst.max(near);
+                if bound <= worst {
                     continue;
                 }
-                let d = self.dist(centroid, t);
-                if nearest.is_none_or(|(_, best)| d.total_cmp(&best).is_lt()) {
-                    nearest = Some((t, d));
+                if bound <= limit(worst, lower) || depth >= FAN_DEPTH {
+                    worst = bound;
+                    continue;
                 }
-            }
-            let Some((at, d)) = nearest else {
-                assigned.push(NEVER);
-                continue;
-            };
-            self.covers[at as usize].push(o);
-            assigned.push(at);
-            worst = worst.max(d);
-        }
-        worst = self.measure_fan(fan, region, groups, worst);
-        // A corner shared by several originals is one sample: visited once.
-        let g = self.next_generation();
-        for (&o, &at) in region.iter().zip(&assigned) {
-            if at == NEVER {
-                continue;
-            }
-            let [a, b, c] = self.corners[o as usize];
-            let near = [a, b, c].map(|v| self.dist(v, at));
-            if near.iter().all(|&d| d <= worst) {
-                continue;
-            }
-            let tri = self.tris[o as usize];
-            for (k, s) in samples(a, b, c)[..6].iter().enumerate() {
-                let mut best = if k < 3 {
-                    if self.mark[tri[k] as usize] == g {
-                        continue;
-                    }
-                    self.mark[tri[k] as usize] = g;
-                    near[k]
-                } else {
-                    self.dist(*s, at)
-                };
-                if best > worst {
-                    for &t in fan {
-                        if t == at || self.beyond(*s, t, best) {
-                            continue;
-                        }
-                        best = best.min(self.dist(*s, t));
-                        if best <= worst {
-                            break;
-                        }
-                    }
-                }
-                worst = worst.max(best);
+                parts.clear();
+                let along = nearest.map(|o| self.pieces[o as usize]);
+                bound::split(&piece, along.as_ref(), &mut parts);
+                todo.extend(parts.iter().map(|&p| (p, depth + 1, nearest)));
             }
         }
+        self.scratch_fan_pieces = todo;
+        self.scratch_parts = parts;
+        self.scratch_pieces = stack;
+        self.scratch_ring = ring;
+        self.scratch_cands = cands;
+        self.scratch_cand_groups = cand_groups;
         self.scratch_assigned = assigned;
         worst
     }
 
-    /// The fan → region half of [`Builder::measure`]: the largest of `worst` and the distance
-    /// from every sample of the fan to the original triangles of `region`.
-    fn measure_fan(
+    /// [`bound::height_over`] for fan triangle `t` over the original triangles of the pieces
+    /// it covers and those covered by the triangles across its edges (live ones, the fan's
+    /// included): the surface under it and around its edges.
+    fn height_bound(&mut self, t: u32) -> Option<f64> {
+        let mut near = std::mem::take(&mut self.scratch_near);
+        near.clear();
+        let tri = self.tris[t as usize];
+        near.extend(
+            self.covers[t as usize]
+                .iter()
+                .map(|&o| self.piece_origin[o as usize]),
+        );
+        for k in 0..3 {
+            let (u, v) = (tri[k], tri[(k + 1) % 3]);
+            for &x in &self.around[u as usize] {
+                if x != t && self.tris[x as usize].contains(&v) {
+                    near.extend(
+                        self.covers[x as usize]
+                            .iter()
+                            .map(|&o| self.piece_origin[o as usize]),
+                    );
+                }
+            }
+        }
+        near.sort_unstable();
+        near.dedup();
+        let mut originals = std::mem::take(&mut self.scratch_originals);
+        originals.clear();
+        originals.extend(
+            near.iter()
+                .map(|&o| (self.corners[o as usize], self.tris[o as usize])),
+        );
+        let mut edges = std::mem::take(&mut self.scratch_edges3);
+        let bound = bound::height_over(&self.corners[t as usize], &originals, &mut edges);
+        self.scratch_edges3 = edges;
+        self.scratch_originals = originals;
+        self.scratch_near = near;
+        bound
+    }
+
+    /// The fan triangle whose farthest point from piece `o` is nearest, that distance (exact,
+    /// convexity), and the largest over the piece's corners of their distance to the nearest
+    /// fan triangle (a true distance to the fan: a lower bound of what the piece needs).
+    fn nearest_fan_triangle(&self, fan: &[u32], o: u32) -> (u32, f64, f64) {
+        let piece = self.pieces[o as usize];
+        let mut corner_best = [f64::INFINITY; 3];
+        let mut best = (fan[0], f64::INFINITY);
+        for &t in fan {
+            // A corner whose distance cannot matter (beyond its nearest so far, and the
+            // triangle already farther than the best) is not measured.
+            let sphere = self.spheres[t as usize];
+            let mut far = 0.0f64;
+            for (k, &p) in piece.iter().enumerate() {
+                if far > best.1 && outside(p, sphere, corner_best[k]) {
+                    continue;
+                }
+                let d = self.dist(p, t);
+                corner_best[k] = corner_best[k].min(d);
+                far = far.max(d);
+            }
+            if far < best.1 {
+                best = (t, far);
+            }
+        }
+        let near = corner_best.into_iter().fold(0.0, f64::max);
+        (best.0, best.1, near)
+    }
+
+    /// A certified bound of the distance from every point of `piece` to the pieces `cands`
+    /// (grouped by `groups`), or a value no above `worst` once the piece is known to be within
+    /// it; and the piece whose convex bound is the nearest (what to split along).
+    fn bound_piece(
+        &self,
+        piece: &Piece,
+        cands: &[u32],
+        groups: &[Group],
+        worst: f64,
+        hint: Option<u32>,
+    ) -> (f64, Option<u32>, f64) {
+        let mut corner_best = [f64::INFINITY; 3];
+        let mut convex = (f64::INFINITY, None);
+        // The hint first: a part of a piece split along `hint` often lies over it.
+        if let Some(o) = hint {
+            let mut far = 0.0f64;
+            for (k, &p) in piece.iter().enumerate() {
+                let d = self.piece_dist(p, o);
+                corner_best[k] = corner_best[k].min(d);
+                far = far.max(d);
+            }
+            convex = (far, Some(o));
+            if far <= worst {
+                return (far, convex.1, 0.0);
+            }
+        }
+        for g in groups {
+            if piece
+                .iter()
+                .zip(&corner_best)
+                .all(|(&p, &b)| outside(p, g.sphere, b))
+                && piece.iter().any(|&p| outside(p, g.sphere, convex.0))
+            {
+                continue;
+            }
+            for &o in &cands[g.start as usize..g.end as usize] {
+                // Skipped when it can lower no corner's distance and not the convex bound.
+                if piece
+                    .iter()
+                    .zip(&corner_best)
+                    .all(|(&p, &b)| self.piece_beyond(p, o, b))
+                    && piece.iter().any(|&p| self.piece_beyond(p, o, convex.0))
+                {
+                    continue;
+                }
+                let mut far = 0.0f64;
+                for (k, &p) in piece.iter().enumerate() {
+                    let d = self.piece_dist(p, o);
+                    corner_best[k] = corner_best[k].min(d);
+                    far = far.max(d);
+                }
+                if far < convex.0 {
+                    convex = (far, Some(o));
+                    if far <= worst {
+                        return (far, convex.1, 0.0);
+                    }
+                }
+            }
+        }
+        // Every piece that could be nearer to a corner was measured: true distances.
+        let near = corner_best.into_iter().fold(0.0, f64::max);
+        let lipschitz = near + bound::covering_radius(piece);
+        (convex.0.min(lipschitz), convex.1, near)
+    }
+
+    /// Sampled lower bound of the fan → original distance: the largest of `worst` and the
+    /// true distance from every sample of the fan ([`samples`]) to the pieces `cands`
+    /// (grouped by `groups`). It tells [`Builder::measure`] which certified bounds are loose.
+    fn sample_lower(
         &mut self,
         fan: &[u32],
-        region: &[u32],
+        cands: &[u32],
         groups: &[Group],
         mut worst: f64,
     ) -> f64 {
-        // Fan → region; corners and edges the fan triangles share are sampled once.
+        // Corners and edges the fan triangles share are sampled once.
         let g = self.next_generation();
         let mut edges = std::mem::take(&mut self.fan_edges);
         edges.clear();
@@ -644,17 +888,16 @@ impl Builder {
             }
             let own = &self.covers[t as usize];
             for (s, _) in samples(a, b, c).into_iter().zip(todo).filter(|x| x.1) {
-                // Its own originals first, then the region's groups of originals, a group
-                // skipped whole when its sphere is beyond the nearest so far. The outcome,
-                // max(worst, nearest) — unchanged once a triangle within `worst` is found —
-                // does not depend on the order.
+                // Its own pieces first, then the groups, a group skipped whole when its sphere
+                // is beyond the nearest so far. The outcome, max(worst, nearest) — unchanged
+                // once a piece within `worst` is found — does not depend on the order.
                 let mut best = f64::INFINITY;
                 let scan = |list: &[u32], best: &mut f64| {
                     for &o in list {
-                        if self.beyond(s, o, *best) {
+                        if self.piece_beyond(s, o, *best) {
                             continue;
                         }
-                        *best = best.min(self.dist(s, o));
+                        *best = best.min(self.piece_dist(s, o));
                         if *best <= worst {
                             return true;
                         }
@@ -664,7 +907,7 @@ impl Builder {
                 if !scan(own, &mut best) {
                     for g in groups {
                         if !outside(s, g.sphere, best)
-                            && scan(&region[g.start as usize..g.end as usize], &mut best)
+                            && scan(&cands[g.start as usize..g.end as usize], &mut best)
                         {
                             break;
                         }

@@ -9,22 +9,27 @@
 //! it (`NEVER`: still there at the coarsest level). Triangles sharing (creator, remover) form
 //! the **arcs** of the DAG.
 //!
-//! **Node errors are two-sided Hausdorff distances**, sampled: between the fan a collapse
-//! creates and the original triangles its region covers (each original triangle is assigned
-//! to the nearest triangle of the fan that replaced it, so regions stay tight), maxed with the
-//! errors of the nodes whose triangles it removes — monotone along the DAG. A **cut** for ε
-//! draws the triangles whose creator's error is ≤ ε and whose remover's is > ε: the nodes with
-//! error ≤ ε form a closed set (monotonicity), so the cut is a valid triangulation of the patch
-//! within ε of the original, two-sided. Patch borders may collapse along themselves (corners,
-//! where the border turns by more than 45°, stay); the gaps
-//! to neighbouring patches are covered by fat borders like those of independently tessellated
-//! surfaces.
+//! **Node errors are certified two-sided Hausdorff bounds** (`bound`, issue 30 item 3): upper
+//! bounds, not samples, of the distance between the fan a collapse creates and the original
+//! surface. Original → fan: every piece of the original surface is given to one fan triangle
+//! (the one whose farthest point from it is nearest) and measured against it exactly at its
+//! corners (distance to a triangle is convex), split where that is loose; it stays with the
+//! triangle until the triangle is removed, so every cut holding the triangle holds the bound.
+//! Fan → original: the height of the surface over the fan triangle where it covers it, else
+//! convex and Lipschitz bounds on parts of the triangle. Maxed with the errors of the nodes
+//! whose triangles it removes — monotone along the DAG. A **cut** for ε draws the triangles
+//! whose creator's error is ≤ ε and whose remover's is > ε: the nodes with error ≤ ε form a
+//! closed set (monotonicity), so the cut is a valid triangulation of the patch within ε of the
+//! original, two-sided. Patch borders collapse along themselves, corners too (the node error
+//! measures what that costs); the gaps to neighbouring patches are covered by fat borders like
+//! those of independently tessellated surfaces.
 //!
 //! The algorithms live in their own modules: `build` (half-edge collapses by quadric error,
-//! Hausdorff node errors), `reduce` (Holst §4: arc collapse and the error adjustment) and
+//! Hausdorff node errors), `bound` (the certified distance bounds they use), `reduce` (Holst §4: arc collapse and the error adjustment) and
 //! `cut` (Holst §3: cuts as per-arc index ranges, moved from frame to frame). This module
 //! holds the hierarchy they share.
 
+mod bound;
 mod build;
 mod cut;
 mod reduce;
