@@ -28,8 +28,9 @@ use crate::mt::{MtHierarchy, MtParts};
 /// so older caches stop matching. 3: patches' vertices split by normal at creases and where
 /// the file's normals differ (`model::creases`), so a patch's vertex numbering changed. 4: the
 /// build's quadrics start at zero (not glam's identity), border corners collapse, and the
-/// reduction merges nodes within `mt::MAX_MERGE_ERROR_RATIO`: other hierarchies.
-pub const FORMAT_VERSION: u32 = 4;
+/// reduction merges nodes within `mt::MAX_MERGE_ERROR_RATIO`: other hierarchies. 5: node
+/// errors are certified bounds (`mt::bound`), not samples: other errors and hierarchies.
+pub const FORMAT_VERSION: u32 = 5;
 
 const MAGIC: &[u8; 8] = b"PWMTCACH";
 const HEADER: usize = 8 + 4 + 16 + 8 + 16;
