@@ -26,8 +26,12 @@ use crate::shard::{self, Shard};
 pub struct CheckArgs {
     /// Model files (`-` reads stdin, with --format); several: one block (one JSON object in
     /// an array) per file, exit code the worst.
-    #[arg(required = true)]
+    #[arg(required_unless_present = "files_from")]
     files: Vec<PathBuf>,
+    /// Also check the files listed in LIST, one path per line (after those given; blank
+    /// lines and lines starting with `#` skipped): corpora longer than a command line.
+    #[arg(long, value_name = "LIST")]
+    files_from: Option<PathBuf>,
     #[command(flatten)]
     cache: crate::args::CacheArgs,
     /// Number of random views.
@@ -291,11 +295,34 @@ impl FileBlock<'_> {
 
 /// The validated options of one invocation.
 struct Checked {
+    files: Vec<PathBuf>,
     run: Run,
     opts: CheckOptions,
 }
 
+/// The files given, then those `--files-from` lists.
+fn files(args: &CheckArgs) -> Result<Vec<PathBuf>, CliError> {
+    let mut files = args.files.clone();
+    if let Some(list) = &args.files_from {
+        let text = std::fs::read_to_string(list).map_err(|source| CliError::Io {
+            path: list.clone(),
+            source,
+        })?;
+        files.extend(
+            text.lines()
+                .map(str::trim_end)
+                .filter(|l| !l.trim().is_empty() && !l.starts_with('#'))
+                .map(PathBuf::from),
+        );
+        if files.is_empty() {
+            return Err(CliError::NoFiles { list: list.clone() });
+        }
+    }
+    Ok(files)
+}
+
 fn checked(args: &CheckArgs) -> Result<Checked, CliError> {
+    let files = files(args)?;
     let fov_y = fov_y(args.fov)?;
     let pixel_error = pixel_error(args.pixel_error)?;
     let views = at_least("--views", args.views, 1)?;
@@ -312,7 +339,7 @@ fn checked(args: &CheckArgs) -> Result<Checked, CliError> {
         ..CheckOptions::default()
     };
     let run = Run {
-        files: args.files.iter().map(|f| f.display().to_string()).collect(),
+        files: files.iter().map(|f| f.display().to_string()).collect(),
         views,
         pixel_error,
         size: args.size,
@@ -326,7 +353,7 @@ fn checked(args: &CheckArgs) -> Result<Checked, CliError> {
             "primitives": format!("{:?}", args.primitives.primitives),
         }),
     };
-    Ok(Checked { run, opts })
+    Ok(Checked { files, run, opts })
 }
 
 /// Whether the check passed (no crack pixel with fat borders) for every file.
@@ -341,7 +368,7 @@ pub fn run(args: &CheckArgs) -> Result<bool, CliError> {
         return run_shard(args, &checked, shard, &mut renderer);
     }
     let block = FileBlock { run: &checked.run };
-    super::for_each_file(&args.files, |file| {
+    super::for_each_file(&checked.files, |file| {
         let cases = run_views(args, &checked, file, None, &mut renderer)?;
         Ok(block.summary(
             &file.display().to_string(),
@@ -424,7 +451,7 @@ fn run_shard(
     let count: usize = mine.iter().map(Vec::len).sum();
     data!("shard {shard}: {count} of {} cases", all.len());
     let (mut cases, mut failed, mut passed) = (Vec::new(), 0, true);
-    for ((file, name), views) in args.files.iter().zip(&run.files).zip(mine) {
+    for ((file, name), views) in checked.files.iter().zip(&run.files).zip(mine) {
         if views.is_empty() {
             continue;
         }
@@ -470,7 +497,7 @@ fn run_shard(
     if failed > 0 {
         return Err(CliError::FilesFailed {
             failed,
-            total: args.files.len(),
+            total: checked.files.len(),
         });
     }
     Ok(passed)
