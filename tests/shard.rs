@@ -1,4 +1,4 @@
-//! Sharded `check` runs (issue 33): shards merge to what the unsharded run prints and exits
+//! Sharded `check` and `bench --scale` runs (issue 33): shards merge to what the unsharded run prints and exits
 //! with; `merge` refuses shards that are missing, given twice or of another run; `--shard
 //! auto` reads the batch engine's index; the Slurm script and the Kubernetes manifest's
 //! scripts run with a fake index and their merge step gives the unsharded result.
@@ -253,6 +253,68 @@ fn merge_refuses_missing_duplicated_or_foreign_shards() {
     refused(
         &merge(&[one, &not_json, three], &[]),
         "not a patchwork shard file",
+    );
+}
+
+/// The model and patch columns of a `bench --scale` table, and the line above it.
+fn scale_table(stdout: &str) -> (String, Vec<String>) {
+    let heading = stdout
+        .lines()
+        .find(|l| l.starts_with("scale sweep:"))
+        .unwrap_or_default()
+        .to_owned();
+    let rows = stdout
+        .lines()
+        .filter(|l| l.starts_with("| ") && !l.starts_with("| model"))
+        .map(|l| l.split('|').take(3).collect::<Vec<_>>().join("|"))
+        .collect();
+    (heading, rows)
+}
+
+/// `bench --scale` loops over points (grids and files): sharded over 3 (one empty), its
+/// points (one failing: a missing file) merge to the unsharded table, in its order, with its exit code.
+/// Timings differ from run to run, so the rows are compared by model and patch count.
+#[test]
+fn bench_scale_shards_merge_to_the_unsharded_table() {
+    let missing = "target/test-output/shard/missing.step";
+    let args = [
+        "bench", "--scale", "--sizes", "1,2", "--frames", "2", "--size", "64x48", TEAPOT, SCREW,
+        missing,
+    ];
+    let want = patchwork(&args);
+    assert_eq!(code(&want), 1, "a point failed: {}", text(&want.stderr));
+    let (heading, rows) = scale_table(&text(&want.stdout));
+    assert_eq!(rows.len(), 4, "{}", text(&want.stdout));
+    let dir = fresh("scale");
+    let mut paths = Vec::new();
+    for i in 1..=3 {
+        let path = dir.join(format!("shard-{i}.json"));
+        let shard = format!("{i}/3");
+        let mut a = args.to_vec();
+        a.extend_from_slice(&["--shard", &shard, "--out", s(&path)]);
+        let o = patchwork(&a);
+        assert!(path.exists(), "shard {shard}: {}", text(&o.stderr));
+        // grid#1, the screw and the missing file; grid#2 and the teapot; nothing: an empty
+        // shard still writes its file, and merge still wants it.
+        let cases = json(&path)["cases"].as_array().map_or(0, Vec::len);
+        assert_eq!(cases, [3, 2, 0][i - 1], "shard {shard}'s points");
+        paths.push(path);
+    }
+    let refs: Vec<&Path> = paths.iter().map(PathBuf::as_path).collect();
+    let o = merge(&[refs[1], refs[2], refs[0]], &[]);
+    assert_eq!(code(&o), 1, "{}", text(&o.stderr));
+    assert_eq!(scale_table(&text(&o.stdout)), (heading, rows));
+    assert!(
+        text(&o.stderr).contains("missing.step"),
+        "{}",
+        text(&o.stderr)
+    );
+    let o = merge(&refs[..2], &[]);
+    assert_eq!(code(&o), 2);
+    assert!(
+        text(&o.stderr).contains("missing shard(s) 3 of 3"),
+        "{}",
+        text(&o.stderr)
     );
 }
 

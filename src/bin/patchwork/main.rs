@@ -46,8 +46,9 @@ enum Command {
     Stats(cmd::stats::StatsArgs),
     /// Render random views with fat borders off and on and count crack and growth pixels.
     Check(cmd::check::CheckArgs),
-    /// Combine the shards of a sharded `check --shard I/N` run: the unsharded run's output
-    /// and exit code, or exit 2 when a shard is missing, given twice or of another run.
+    /// Combine the shards of a sharded run (`check --shard I/N`, `bench --scale --shard I/N`):
+    /// the unsharded run's output and exit code, or exit 2 when a shard is missing, given
+    /// twice or of another run.
     Merge(cmd::merge::MergeArgs),
     /// Write the tessellation as binary glTF (.glb): one mesh per part, one node per placement.
     Export(cmd::export::ExportArgs),

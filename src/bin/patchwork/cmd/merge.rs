@@ -1,12 +1,13 @@
-//! `patchwork merge SHARD.json…`: the shards of a sharded run (`check --shard I/N`) put back
-//! together. It prints what the unsharded run prints (text or `--json`, through
-//! `check::FileBlock`) and exits as it would: 0, 1 when a fat-bordered view cracked, 2 when a
-//! file failed — or 2 when the shards do not make up one whole run exactly once.
+//! `patchwork merge SHARD.json…`: the shards of a sharded run (`check --shard I/N`, `bench
+//! --scale --shard I/N`) put back together. It prints what the unsharded run prints (`check`:
+//! text or `--json`, through `check::FileBlock`; `bench --scale`: the table) and exits as it
+//! would: `check` 0, 1 when a fat-bordered view cracked, 2 when a file failed; `bench --scale`
+//! 1 when a point failed — or 2 when the shards do not make up one whole run exactly once.
 //!
 //! Checked before anything is printed: every file is a shard of this format; all ran the same
 //! run (files, views and every option that changes a result) in the same number of shards N;
-//! each of the shards 1..N is given exactly once; the run's case list (files × views),
-//! recomputed here, has the fingerprint the shards recorded; every case is in the shard its
+//! each of the shards 1..N is given exactly once; the run's case list (`check`: files × views;
+//! `bench --scale`: the points), recomputed here, has the fingerprint the shards recorded; every case is in the shard its
 //! id hashes to, and each case of the run comes exactly once.
 
 use std::collections::BTreeMap;
@@ -21,18 +22,21 @@ use patchwork::render::FatBorders;
 
 use super::check::{CaseResult, FileBlock, Run};
 use crate::error::CliError;
-use crate::out::note;
+use crate::out::{data, note};
 use crate::shard;
 
 #[derive(Args, Debug)]
 pub struct MergeArgs {
-    /// The shard files (`check --shard I/N --out FILE`), one per shard, in any order.
+    /// The shard files (`check --shard I/N --out FILE`, `bench --scale --shard I/N --out
+    /// FILE`), one per shard, in any order.
     #[arg(required = true)]
     shards: Vec<PathBuf>,
 }
 
 #[derive(Debug, Error)]
 pub enum MergeError {
+    #[error("no shard file given")]
+    NoShards,
     #[error("{}: {source}", .path.display())]
     Read {
         path: PathBuf,
@@ -231,19 +235,16 @@ fn parse_case(
     Ok((id, view, Ok(result)))
 }
 
-/// The cases of a whole run, file by file in the run's order, each file's views in order.
-struct Merged {
-    run: Run,
-    files: Vec<BTreeMap<usize, Result<CaseResult, String>>>,
-    shards: usize,
-}
-
-fn merge(paths: &[PathBuf]) -> Result<Merged, MergeError> {
+/// The shards, read and checked to be of one run (same run, same number of shards), each of
+/// 1..N given exactly once.
+fn gather(paths: &[PathBuf]) -> Result<Vec<ShardFile>, MergeError> {
     let shards: Vec<ShardFile> = paths
         .iter()
         .map(|p| read_shard(p))
         .collect::<Result<_, _>>()?;
-    let first = &shards[0];
+    let Some(first) = shards.first() else {
+        return Err(MergeError::NoShards);
+    };
     let total = first.shard.total;
     let mut by_index: BTreeMap<usize, &Path> = BTreeMap::new();
     for s in &shards {
@@ -256,7 +257,7 @@ fn merge(paths: &[PathBuf]) -> Result<Merged, MergeError> {
             return Err(other("the number of shards"));
         }
         if s.run != first.run {
-            return Err(other("the run (files, views or options)"));
+            return Err(other("the run (its cases or options)"));
         }
         if s.cases_total != first.cases_total || s.fingerprint != first.fingerprint {
             return Err(other("the case list"));
@@ -274,72 +275,112 @@ fn merge(paths: &[PathBuf]) -> Result<Merged, MergeError> {
     if !missing.is_empty() {
         return Err(MergeError::MissingShards { missing, total });
     }
-    let run = parse_run(&first.path, &first.run)?;
-    let all = run.case_ids();
+    Ok(shards)
+}
+
+/// Every case of the run (`all`: its ids, in the run's order, as recomputed from the run) with
+/// the shard file it came from: each in the shard its id hashes to, none twice, none missing.
+fn assign<'a>(
+    shards: &'a [ShardFile],
+    all: &[String],
+) -> Result<Vec<(&'a Path, &'a Value)>, MergeError> {
+    let Some(first) = shards.first() else {
+        return Err(MergeError::NoShards);
+    };
     if all.len() as u64 != first.cases_total
-        || shard::fingerprint(all.iter().map(|(_, _, id)| id.as_str())) != first.fingerprint
+        || shard::fingerprint(all.iter().map(String::as_str)) != first.fingerprint
     {
         return Err(MergeError::Fingerprint {
             path: first.path.clone(),
         });
     }
-    let file_of: BTreeMap<&str, usize> = all.iter().map(|(f, _, id)| (id.as_str(), *f)).collect();
-    let mut files: Vec<BTreeMap<usize, Result<CaseResult, String>>> =
-        vec![BTreeMap::new(); run.files.len()];
-    for s in &shards {
+    let position: BTreeMap<&str, usize> = all
+        .iter()
+        .enumerate()
+        .map(|(k, id)| (id.as_str(), k))
+        .collect();
+    let mut slots: Vec<Option<(&Path, &Value)>> = vec![None; all.len()];
+    for s in shards {
         for case in &s.cases {
-            let (id, view, result) = parse_case(&s.path, &run, case)?;
+            let id = case["id"].as_str().unwrap_or_default();
             let bad = |reason| MergeError::BadCase {
                 path: s.path.clone(),
-                id: id.clone(),
+                id: id.to_owned(),
                 reason,
             };
-            let Some(&f) = file_of.get(id.as_str()) else {
+            let Some(&k) = position.get(id) else {
                 return Err(bad("is not a case of the run"));
             };
-            if shard::shard_of(&id, total) != s.shard.index {
+            if shard::shard_of(id, s.shard.total) != s.shard.index {
                 return Err(bad("belongs to another shard"));
             }
-            if files[f].insert(view, result).is_some() {
+            if slots[k].replace((s.path.as_path(), case)).is_some() {
                 return Err(bad("comes twice"));
             }
         }
     }
-    let done: usize = files.iter().map(BTreeMap::len).sum();
-    if done != all.len() {
-        let first = all
+    let missing = slots.iter().filter(|s| s.is_none()).count();
+    if missing > 0 {
+        let first = slots
             .iter()
-            .find(|(f, view, _)| !files[*f].contains_key(view))
-            .map(|(_, _, id)| id.clone())
+            .zip(all)
+            .find(|(s, _)| s.is_none())
+            .map(|(_, id)| id.clone())
             .unwrap_or_default();
         return Err(MergeError::MissingCases {
-            count: all.len() - done,
+            count: missing,
             first,
         });
     }
-    Ok(Merged {
-        run,
-        files,
-        shards: total,
-    })
+    Ok(slots.into_iter().flatten().collect())
 }
 
 /// Prints the merged run as the unsharded run prints it; returns what it returns.
 pub fn run(args: &MergeArgs) -> Result<bool, CliError> {
-    let merged = merge(&args.shards)?;
-    let run = &merged.run;
+    let shards = gather(&args.shards)?;
+    let Some(first) = shards.first() else {
+        return Err(MergeError::NoShards.into());
+    };
+    match first.run["command"].as_str() {
+        Some("check") => merge_check(&shards),
+        Some("bench-scale") => merge_scale(&shards),
+        _ => Err(MergeError::NotShard {
+            path: first.path.clone(),
+            reason: format!(
+                "run.command {} is not check or bench-scale",
+                first.run["command"]
+            ),
+        }
+        .into()),
+    }
+}
+
+/// `check`: file by file as the unsharded run prints them (`check::FileBlock`).
+fn merge_check(shards: &[ShardFile]) -> Result<bool, CliError> {
+    let Some(first) = shards.first() else {
+        return Err(MergeError::NoShards.into());
+    };
+    let run = parse_run(&first.path, &first.run)?;
+    let ids = run.case_ids();
+    let all: Vec<String> = ids.iter().map(|(_, _, id)| id.clone()).collect();
+    let mut files: Vec<BTreeMap<usize, Result<CaseResult, String>>> =
+        vec![BTreeMap::new(); run.files.len()];
+    for ((f, _, _), (path, case)) in ids.iter().zip(assign(shards, &all)?) {
+        let (_, view, result) = parse_case(path, &run, case)?;
+        files[*f].insert(view, result);
+    }
     note!(
         "merged {} shards: {} cases ({} files × {} views)",
-        merged.shards,
-        run.files.len() * run.views,
+        first.shard.total,
+        all.len(),
         run.files.len(),
         run.views
     );
-    let block = FileBlock { run };
+    let block = FileBlock { run: &run };
     let paths: Vec<PathBuf> = run.files.iter().map(PathBuf::from).collect();
     let mut next = 0;
     super::for_each_file(&paths, |_| {
-        let (name, cases) = (&run.files[next], &merged.files[next]);
+        let (name, cases) = (&run.files[next], &files[next]);
         next += 1;
         // The unsharded run stops a file at its first error (the load, usually).
         if let Some(Err(error)) = cases.values().find(|c| c.is_err()) {
@@ -352,4 +393,60 @@ pub fn run(args: &MergeArgs) -> Result<bool, CliError> {
         }
         Ok(block.summary(name, &run.views.to_string(), &cases))
     })
+}
+
+/// `bench --scale`: the points' errors on stderr, then the heading and the table, in the
+/// unsharded run's order; exit code 1 when a point failed.
+fn merge_scale(shards: &[ShardFile]) -> Result<bool, CliError> {
+    let Some(first) = shards.first() else {
+        return Err(MergeError::NoShards.into());
+    };
+    let run = &first.run;
+    let not = |what: &str| MergeError::NotShard {
+        path: first.path.clone(),
+        reason: format!("run.{what} missing or malformed"),
+    };
+    let all: Vec<String> = run["cases"]
+        .as_array()
+        .and_then(|a| a.iter().map(|c| c.as_str().map(str::to_owned)).collect())
+        .ok_or_else(|| not("cases"))?;
+    let size = |k| {
+        run["size"][k]
+            .as_u64()
+            .and_then(|n| u32::try_from(n).ok())
+            .ok_or_else(|| not("size"))
+    };
+    let heading = super::bench::scale_heading(
+        run["frames"].as_u64().ok_or_else(|| not("frames"))? as usize,
+        (size(0)?, size(1)?),
+        run["pixel_error"]
+            .as_f64()
+            .ok_or_else(|| not("pixel_error"))?,
+        run["budget_ms"].as_f64().ok_or_else(|| not("budget_ms"))?,
+    );
+    let mut points = Vec::new();
+    let mut failed = 0;
+    for (path, case) in assign(shards, &all)? {
+        let bad = |reason| MergeError::BadCase {
+            path: path.to_owned(),
+            id: case["id"].as_str().unwrap_or_default().to_owned(),
+            reason,
+        };
+        if let Some(error) = case["error"].as_str() {
+            eprintln!("error: {error}");
+            failed += 1;
+            continue;
+        }
+        let row = case["row"].as_str().ok_or_else(|| bad("has no row"))?;
+        points.push(
+            patchwork::report::scale::parse_row(row).map_err(|_| bad("has a malformed row"))?,
+        );
+    }
+    note!("merged {} shards: {} points", first.shard.total, all.len());
+    data!("{heading}");
+    crate::out::write(format_args!(
+        "{}",
+        patchwork::report::scale::markdown(&points)
+    ));
+    Ok(failed == 0)
 }
