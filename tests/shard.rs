@@ -1,7 +1,8 @@
-//! Sharded `check` and `bench --scale` runs (issue 33): shards merge to what the unsharded run prints and exits
-//! with; `merge` refuses shards that are missing, given twice or of another run; `--shard
-//! auto` reads the batch engine's index; the Slurm script and the Kubernetes manifest's
-//! scripts run with a fake index and their merge step gives the unsharded result.
+//! Sharded `check` and `bench --scale` runs (issue 33): shards merge to what the unsharded
+//! run prints and exits with; `merge` refuses shards that are missing, given twice or of
+//! another run; `--shard auto` reads the batch engine's index; the Slurm script and the
+//! Kubernetes manifest's scripts run with a fake index and their merge step gives the
+//! unsharded result.
 
 mod common;
 
@@ -272,8 +273,8 @@ fn scale_table(stdout: &str) -> (String, Vec<String>) {
 }
 
 /// `bench --scale` loops over points (grids and files): sharded over 3 (one empty), its
-/// points (one failing: a missing file) merge to the unsharded table, in its order, with its exit code.
-/// Timings differ from run to run, so the rows are compared by model and patch count.
+/// points (one failing: a missing file) merge to the unsharded table, in its order, with its
+/// exit code. Timings differ from run to run, so the rows are compared by model and patch count.
 #[test]
 fn bench_scale_shards_merge_to_the_unsharded_table() {
     let missing = "target/test-output/shard/missing.step";

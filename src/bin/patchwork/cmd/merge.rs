@@ -7,8 +7,8 @@
 //! Checked before anything is printed: every file is a shard of this format; all ran the same
 //! run (files, views and every option that changes a result) in the same number of shards N;
 //! each of the shards 1..N is given exactly once; the run's case list (`check`: files × views;
-//! `bench --scale`: the points), recomputed here, has the fingerprint the shards recorded; every case is in the shard its
-//! id hashes to, and each case of the run comes exactly once.
+//! `bench --scale`: the points), recomputed here, has the fingerprint the shards recorded;
+//! every case is in the shard its id hashes to, and each case of the run comes exactly once.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
