@@ -11,6 +11,7 @@
 pub mod anim;
 pub mod check;
 pub mod drive;
+pub mod embed;
 pub mod export;
 pub mod frame;
 pub mod geom;

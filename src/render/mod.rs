@@ -29,7 +29,8 @@ pub use gpu::{Gpu, RenderError};
 pub use resident::{ResidentGeometry, UploadStats};
 pub use upload::GpuMeshes;
 
-use pipelines::{Pipelines, Target, Targets};
+use pipelines::Targets;
+pub(crate) use pipelines::{Globals, Pipelines, Target};
 use upload::{StaticKey, StaticPatch};
 
 use std::collections::HashMap;
