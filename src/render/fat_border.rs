@@ -286,7 +286,7 @@ pub const SLOTS_PER_POINT: usize = 8;
 const PATTERN_2: [u32; 6] = [c(0, 2), c(0, 5), c(1, 6), c(0, 2), c(1, 6), c(1, 3)];
 
 /// The triangle-list codes drawn once per point (see `c`): the templates of 6 and 4
-/// vertices, and [`PATTERN_2`].
+/// vertices, and `PATTERN_2`.
 pub fn pattern(variant: FatBorders) -> &'static [u32] {
     match variant {
         FatBorders::Two => &PATTERN_2,
