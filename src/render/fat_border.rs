@@ -123,7 +123,7 @@ const TEMPLATE_4: [u32; 12] = [
 const TEMPLATE_2: [u32; 6] = [c(0, 2), c(0, 5), c(1, 5), c(0, 2), c(1, 5), c(1, 2)];
 
 /// Triangle-list template drawn once per border vertex v_i, as codes (see `c`).
-pub fn template(variant: FatBorders) -> &'static [u32] {
+pub(crate) fn template(variant: FatBorders) -> &'static [u32] {
     match variant {
         FatBorders::Off => &[],
         FatBorders::Six => &TEMPLATE_6,
@@ -193,7 +193,7 @@ fn width_of(eps: f32, code: u32) -> f32 {
 
 /// The width field of a code or [`BorderPoint::info`] for a half-width `width` ≤ `eps`:
 /// rounded up to the next 63rd of ε (never narrower than measured), 0 (full) at ε.
-pub fn width_bits(width: f64, eps: f64) -> u32 {
+pub(crate) fn width_bits(width: f64, eps: f64) -> u32 {
     let narrower = width.is_finite() && eps > 0.0 && width < eps;
     if !narrower {
         return 0;
@@ -296,7 +296,7 @@ pub fn pattern(variant: FatBorders) -> &'static [u32] {
 
 /// Index `pattern(variant)` for points `0..points`: code (end, slot) of point k is vertex
 /// 8(k + end) + slot. One buffer of it serves every draw (offset by a base vertex).
-pub fn pattern_indices(variant: FatBorders, points: usize) -> Vec<u32> {
+pub(crate) fn pattern_indices(variant: FatBorders, points: usize) -> Vec<u32> {
     let codes = pattern(variant);
     let mut out = Vec::with_capacity(points * codes.len());
     for k in 0..points {
@@ -447,7 +447,7 @@ impl BorderGeometry {
 
     /// Points [`BorderGeometry::append`] adds for `m`: its border vertices and a closing
     /// point per ring.
-    pub fn points_of(m: &PatchMesh) -> usize {
+    pub(crate) fn points_of(m: &PatchMesh) -> usize {
         m.geometry()
             .borders
             .iter()

@@ -129,7 +129,7 @@ impl Gpu {
     }
 
     /// Largest square texture side the device accepts.
-    pub fn max_texture_side(&self) -> u32 {
+    pub(crate) fn max_texture_side(&self) -> u32 {
         self.device.limits().max_texture_dimension_2d
     }
 }

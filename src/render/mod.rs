@@ -92,7 +92,7 @@ impl Primitives {
     pub const NAMES: &'static str = "auto, list, strips, mts or repair";
 
     /// Whether `m` is drawn as triangle strips.
-    pub fn strips_for(self, m: &PatchMesh) -> bool {
+    pub(crate) fn strips_for(self, m: &PatchMesh) -> bool {
         match self {
             Primitives::List => false,
             Primitives::Auto => m.arcs.is_some(),

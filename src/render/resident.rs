@@ -150,7 +150,7 @@ impl ResidentMemory {
     }
 
     /// Bytes in live ranges and records.
-    pub fn used_total(&self) -> u64 {
+    pub(crate) fn used_total(&self) -> u64 {
         self.used.iter().sum::<u64>() + self.records_used
     }
 }
