@@ -7,10 +7,52 @@
 //!
 //! Data flows one way: `io` → `model` → `tessellate` → `render`; `view` converts pixel errors
 //! to object errors in one place; `check` measures rendered images (cracks, growth, goldens).
+//!
+//! # Drawing patchwork inside your own wgpu renderer
+//!
+//! [`embed::Renderer`] is the entry point: it draws a scene ([`prep::load`]) into your device,
+//! your render pass and your camera, with the LOD frame loop and fat borders.
+//! `examples/embed.rs` is a whole program (its own headless device, targets and triangle,
+//! drawn beside the teapot in one pass).
+//!
+//! ```no_run
+//! # fn frame(
+//! #     device: &wgpu::Device,
+//! #     queue: &wgpu::Queue,
+//! #     pass: &mut wgpu::RenderPass<'_>,
+//! # ) -> Result<(), Box<dyn std::error::Error>> {
+//! use patchwork::embed::glam::{Mat4, Vec3};
+//! use patchwork::embed::{Camera, EmbedOptions, Renderer};
+//!
+//! let scene = patchwork::prep::load(std::path::Path::new("models/teapot.bpt"))?;
+//! let mut teapot = Renderer::new(
+//!     device,
+//!     queue,
+//!     wgpu::TextureFormat::Bgra8UnormSrgb, // your pass's colour target
+//!     wgpu::TextureFormat::Depth32Float,   // and its depth target
+//!     scene,
+//!     EmbedOptions::default(),
+//! )?;
+//! let camera = Camera {
+//!     view: Mat4::look_at_rh(Vec3::new(8.0, -8.0, 6.0), Vec3::ZERO, Vec3::Z),
+//!     projection: Mat4::perspective_rh(0.8, 16.0 / 9.0, 0.1, 100.0),
+//!     viewport: (1920, 1080),
+//! };
+//! // Each frame, before your pass: re-tessellation within the budget, uploads, the camera.
+//! teapot.prepare(&camera, 0.5)?;
+//! // Inside your pass, among your own draws:
+//! teapot.draw(pass);
+//! # Ok(())
+//! # }
+//! ```
+//!
+//! The other modules are public for patchwork's own command-line tool, tests and benchmarks
+//! (offscreen rendering, crack checks, readers and export); `embed` is all a renderer needs.
 
 pub mod anim;
 pub mod check;
 pub mod drive;
+pub mod embed;
 pub mod export;
 pub mod frame;
 pub mod geom;

@@ -21,6 +21,7 @@ const STAGES: &[&[&str]] = &[
     &["check"],
     &["anim"],
     &["frame"],
+    &["embed"],
     &["drive"],
     &["export"],
     &["report"],

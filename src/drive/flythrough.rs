@@ -1,5 +1,5 @@
 //! Deterministic fly-through: a recorded camera path (orbit, zoom in close, a sudden jump,
-//! then still) driven through the [`FrameLoop`], with per-frame figures, a summary and a plot.
+//! then still) driven through the [`FrameLoop`](crate::lod::FrameLoop), with per-frame figures, a summary and a plot.
 
 use std::time::{Duration, Instant};
 

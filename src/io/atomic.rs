@@ -206,8 +206,8 @@ pub fn write(path: &Path, bytes: &[u8]) -> io::Result<()> {
 }
 
 /// A temporary folder beside `target` (`.NAME.PID.N.tmp.d`), registered for the signal
-/// handler's clean-up and removed with its contents on drop unless [`TempDir::keep`] was
-/// called.
+/// handler's clean-up and removed with its contents on drop unless [`TempDir::move_into`] moved
+/// it.
 #[derive(Debug)]
 pub struct TempDir {
     path: PathBuf,

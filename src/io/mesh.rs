@@ -5,7 +5,7 @@
 //! group colours). The file's normals (glTF `NORMAL`, OBJ `vn`, PLY `nx ny nz`) are kept in
 //! [`TriMesh::normals`]; where a file has none, welding computes them with creases
 //! ([`crate::model::creases`]). The result is welded into one world-space [`TriMesh`] and
-//! split into patches ([`crate::prep::partition`]). Textures are not read.
+//! split into patches ([`crate::prep::partition`](fn@crate::prep::partition)). Textures are not read.
 
 use std::path::Path;
 

@@ -1,13 +1,13 @@
 //! Readers (files → [`Model`], prepared into a [`crate::model::Scene`] by [`crate::prep`])
 //! and writers (PNG, glTF, depth).
 //!
-//! [`load`] picks the reader by file extension (case-insensitive):
+//! [`read`] picks the reader by file extension (case-insensitive):
 //!
 //! | extension | reader        | up axis |
 //! |-----------|---------------|---------|
 //! | `.bpt`    | [`bpt::read`] | z       |
-//! | `.step`, `.stp` | [`step::parse`] | z (CAD convention) |
-//! | `.step.gz`, `.stp.gz` | gzip, then [`step::parse`] | z |
+//! | `.step`, `.stp` | [`step::read`] | z (CAD convention) |
+//! | `.step.gz`, `.stp.gz` | gzip, then [`step::read`] | z |
 //! | `.iges`, `.igs` (also `.gz`) | [`iges::read`] | z |
 //!
 //! Every reader reports failures as a [`LoadError`] that names the file and, where the problem

@@ -54,7 +54,7 @@ impl Bvh {
 
     /// Appends to `out` every patch whose sphere (`sphere(i)`, the spheres it was built on)
     /// the frustum sees, in no particular order.
-    pub fn visit_seen<'a>(
+    pub(crate) fn visit_seen<'a>(
         &self,
         sphere: impl Fn(usize) -> &'a Sphere,
         frustum: &Frustum,

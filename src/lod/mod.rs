@@ -43,7 +43,7 @@ pub const LEVEL_RATIO: f64 = std::f64::consts::SQRT_2;
 
 /// Queue weight of a patch with current error `current` when the view wants `wanted` (both
 /// object units, > 0): quadratic when too coarse, linear when too fine (module doc).
-pub fn priority(current: f64, wanted: f64) -> f64 {
+pub(crate) fn priority(current: f64, wanted: f64) -> f64 {
     if current > wanted {
         (current / wanted).powi(2)
     } else {
@@ -53,7 +53,7 @@ pub fn priority(current: f64, wanted: f64) -> f64 {
 
 /// What a patch at error `current` needs when the view wants `wanted`, with hysteresis
 /// factor `coarsen_factor` (≥ 1).
-pub fn needs_update(current: f64, wanted: f64, coarsen_factor: f64) -> bool {
+pub(crate) fn needs_update(current: f64, wanted: f64, coarsen_factor: f64) -> bool {
     current > wanted || current * coarsen_factor < wanted
 }
 
@@ -65,7 +65,7 @@ pub struct Levels {
 
 impl Levels {
     /// Levels for a scene of bounding-box diagonal `diagonal`: level 0 is 10⁻⁷ of it.
-    pub fn for_diagonal(diagonal: f64) -> Levels {
+    pub(crate) fn for_diagonal(diagonal: f64) -> Levels {
         let unit = if diagonal.is_finite() && diagonal > 0.0 {
             diagonal * 1e-7
         } else {
@@ -531,7 +531,7 @@ impl PixelErrorController {
     }
 
     /// Records a frame (its triangles and time) and returns the pixel error for the next one.
-    pub fn observe(&mut self, triangles: usize, frame: Duration) -> f64 {
+    pub(crate) fn observe(&mut self, triangles: usize, frame: Duration) -> f64 {
         let (n, t) = (triangles as f64, frame.as_secs_f64());
         let decay = 0.9;
         self.sw = self.sw * decay + 1.0;

@@ -19,7 +19,7 @@ use super::{PatchSurface, Scene, TrimmedFace};
 /// Bytes a scene holds, by kind (see the module doc for what is counted).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct SceneMemory {
-    /// The [`Patch`] structs (`Scene::patches`' capacity × its size).
+    /// The [`Patch`](crate::model::Patch) structs (`Scene::patches`' capacity × its size).
     pub patches: usize,
     /// The surfaces' own heap: Bézier control nets; each distinct trimmed face (struct,
     /// loops) and each distinct edge; each distinct mesh patch (vertices, triangles, borders,

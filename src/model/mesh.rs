@@ -2,7 +2,7 @@
 //!
 //! A [`TriMesh`] is welded (vertices at the same position are one vertex, split again where
 //! their normals differ: [`super::creases`]) and split by
-//! [`partition`] into patches of about a target number of triangles by region growing over
+//! [`partition`](fn@crate::prep::partition) into patches of about a target number of triangles by region growing over
 //! edge-adjacent triangles (breadth first from a seed, so patches come out compact), tiny
 //! leftover regions merged into a neighbour. Each [`MeshPatch`] keeps its own vertices and the
 //! border loops (edges it does not share with another of its triangles) along which fat borders

@@ -259,7 +259,7 @@ fn same_originals(h: &MtHierarchy, p: &MeshPatch) -> bool {
 }
 
 /// Builds a scene from a triangle mesh: welded, split into patches of about
-/// `patch_triangles` triangles ([`partition`]), each with its MT hierarchy reduced
+/// `patch_triangles` triangles ([`partition`](fn@partition)), each with its MT hierarchy reduced
 /// to `arc_size` triangles per arc (built on rayon, reported to `progress`).
 pub fn mesh_scene(
     m: TriMesh,

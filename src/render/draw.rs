@@ -106,7 +106,41 @@ impl Renderer {
         })
     }
 
-    pub(super) fn globals(&self, view: &View, opts: &RenderOptions) -> Globals {
+    /// Records the draws of `meshes` into `pass` (surfaces, then the fat borders of
+    /// `variant`) with `pipes` and the globals bound by `bind`: the one encoding of a frame,
+    /// shared by the offscreen [`Renderer::render`] and a caller's pass ([`crate::embed`]).
+    pub(crate) fn encode_into(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        meshes: Geometry<'_>,
+        pipes: &Pipelines,
+        bind: &wgpu::BindGroup,
+        variant: FatBorders,
+    ) {
+        pass.set_bind_group(0, bind, &[]);
+        match meshes {
+            Geometry::Uploaded(m) => m.encode(pass, pipes, &self.patterns, variant),
+            Geometry::Resident(r) => {
+                r.encode(pass, pipes, &self.patterns, variant, self.gpu.indirect)
+            }
+        }
+    }
+
+    /// The bind group of a uniform buffer of [`Globals`] (group 0 of every pipeline).
+    pub(crate) fn globals_bind_group(&self, uniform: &wgpu::Buffer) -> wgpu::BindGroup {
+        self.gpu
+            .device
+            .create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("globals"),
+                layout: &self.bind_layout,
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: uniform.as_entire_binding(),
+                }],
+            })
+    }
+
+    pub(crate) fn globals(&self, view: &View, opts: &RenderOptions) -> Globals {
         let forward = view.forward();
         let right = forward.cross(view.up).try_normalize().unwrap_or(DVec3::X);
         let up = right.cross(forward);
@@ -156,6 +190,7 @@ impl Renderer {
             self.targets.insert(target, t);
         }
         let device = &self.gpu.device;
+        // Built just above.
         let pipes = &self.pipelines[&target];
         let targets = &self.targets[&target];
         self.gpu
@@ -197,19 +232,7 @@ impl Renderer {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_bind_group(0, bind, &[]);
-            match meshes {
-                Geometry::Uploaded(m) => {
-                    m.encode(&mut pass, pipes, &self.patterns, opts.fat_borders)
-                }
-                Geometry::Resident(r) => r.encode(
-                    &mut pass,
-                    pipes,
-                    &self.patterns,
-                    opts.fat_borders,
-                    self.gpu.indirect,
-                ),
-            }
+            self.encode_into(&mut pass, meshes, pipes, bind, opts.fat_borders);
         }
         read_texture(&self.gpu, encoder, targets, &mut self.last.gpu_wait)
     }

@@ -24,7 +24,7 @@
 //! view is the patch's [`PatchMesh::border_width`] (its measured border error when known,
 //! at least ¼ ε): the crack lies between the neighbours' border polylines, so each needs
 //! only its own border's error, and fins stick that much less out of silhouettes. It rides in
-//! the code's [`WIDTH_MASK`] bits ([`width_bits`]).
+//! the code's [`WIDTH_MASK`] bits (`width_bits`).
 //!
 //! [`expand`] mirrors `fat_border_position` in `shaders/fat_border_lib.wgsl` operation by
 //! operation, in f32, and [`resolve`] / [`position`] mirror the vertex pulling
@@ -123,7 +123,7 @@ const TEMPLATE_4: [u32; 12] = [
 const TEMPLATE_2: [u32; 6] = [c(0, 2), c(0, 5), c(1, 5), c(0, 2), c(1, 5), c(1, 2)];
 
 /// Triangle-list template drawn once per border vertex v_i, as codes (see `c`).
-pub fn template(variant: FatBorders) -> &'static [u32] {
+pub(crate) fn template(variant: FatBorders) -> &'static [u32] {
     match variant {
         FatBorders::Off => &[],
         FatBorders::Six => &TEMPLATE_6,
@@ -193,7 +193,7 @@ fn width_of(eps: f32, code: u32) -> f32 {
 
 /// The width field of a code or [`BorderPoint::info`] for a half-width `width` ≤ `eps`:
 /// rounded up to the next 63rd of ε (never narrower than measured), 0 (full) at ε.
-pub fn width_bits(width: f64, eps: f64) -> u32 {
+pub(crate) fn width_bits(width: f64, eps: f64) -> u32 {
     let narrower = width.is_finite() && eps > 0.0 && width < eps;
     if !narrower {
         return 0;
@@ -204,7 +204,7 @@ pub fn width_bits(width: f64, eps: f64) -> u32 {
 
 /// CPU twin of `fat_border_position` (WGSL). `code` = slot (0 = v_i pushed back, 1..6 = eq.
 /// (1)–(6)) plus [`STRAIGHT_FLAG`] for a straight joint plus the half-width across the view
-/// as a fraction of ε in [`WIDTH_MASK`] ([`width_bits`]; 0 = ε; the push-back along the view is
+/// as a fraction of ε in [`WIDTH_MASK`] (`width_bits`; 0 = ε; the push-back along the view is
 /// always ε). `viewer` is the viewer in
 /// homogeneous coordinates ([`crate::view::View::viewer`]): `(eye, 1)` under perspective, the
 /// point at infinity `(−forward, 0)` under an orthographic projection; the view direction
@@ -249,7 +249,7 @@ pub const INFO_FIRST: u32 = 2;
 pub const INFO_LAST: u32 = 4;
 pub const INFO_CLOSING: u32 = 8;
 /// Bits 4..9 of [`BorderPoint::info`] and of an [`expand`] code: the fat border's half-width
-/// across the view as q / 63 of ε (q = 0: ε), see [`width_bits`].
+/// across the view as q / 63 of ε (q = 0: ε), see `width_bits`.
 pub const WIDTH_SHIFT: u32 = 4;
 pub const WIDTH_MASK: u32 = 63 << WIDTH_SHIFT;
 /// The ring's length − 1 sits above this bit: rings of up to 2²² points (a ring that long
@@ -286,7 +286,7 @@ pub const SLOTS_PER_POINT: usize = 8;
 const PATTERN_2: [u32; 6] = [c(0, 2), c(0, 5), c(1, 6), c(0, 2), c(1, 6), c(1, 3)];
 
 /// The triangle-list codes drawn once per point (see `c`): the templates of 6 and 4
-/// vertices, and [`PATTERN_2`].
+/// vertices, and `PATTERN_2`.
 pub fn pattern(variant: FatBorders) -> &'static [u32] {
     match variant {
         FatBorders::Two => &PATTERN_2,
@@ -296,7 +296,7 @@ pub fn pattern(variant: FatBorders) -> &'static [u32] {
 
 /// Index `pattern(variant)` for points `0..points`: code (end, slot) of point k is vertex
 /// 8(k + end) + slot. One buffer of it serves every draw (offset by a base vertex).
-pub fn pattern_indices(variant: FatBorders, points: usize) -> Vec<u32> {
+pub(crate) fn pattern_indices(variant: FatBorders, points: usize) -> Vec<u32> {
     let codes = pattern(variant);
     let mut out = Vec::with_capacity(points * codes.len());
     for k in 0..points {
@@ -422,7 +422,7 @@ pub fn position_placed(
 /// ([`BorderPoint`], ring after ring, each ring followed by its closing point), the
 /// displaced vertices expanded from them in the vertex shader ([`resolve`], [`position`]),
 /// the triangles indexed by a pattern that depends only on the point's position
-/// ([`pattern_indices`], shared by every draw). The triangles with nonzero area, their
+/// (`pattern_indices`, shared by every draw). The triangles with nonzero area, their
 /// vertices and their order are those of the paper's templates over each ring (§3.2; fans
 /// of straight joints and every triangle of a closing point have zero area and are never
 /// shaded), at 40 bytes per border vertex instead of seven 64-byte displaced vertices and
@@ -447,7 +447,7 @@ impl BorderGeometry {
 
     /// Points [`BorderGeometry::append`] adds for `m`: its border vertices and a closing
     /// point per ring.
-    pub fn points_of(m: &PatchMesh) -> usize {
+    pub(crate) fn points_of(m: &PatchMesh) -> usize {
         m.geometry()
             .borders
             .iter()

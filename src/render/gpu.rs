@@ -108,6 +108,18 @@ impl Gpu {
         })
     }
 
+    /// A caller's device and queue (wgpu's handles are shared references: the caller keeps
+    /// its own). Cut ranges of mesh patches are then drawn one call each, not from indirect
+    /// buffers: a device does not say whether its adapter executes indirect draws.
+    pub(crate) fn from_device(device: &wgpu::Device, queue: &wgpu::Queue) -> Gpu {
+        Gpu {
+            device: device.clone(),
+            queue: queue.clone(),
+            info: device.adapter_info(),
+            indirect: false,
+        }
+    }
+
     /// "llvmpipe (LLVM 15.0.6, 256 bits) via Vulkan (Cpu)".
     pub fn describe(&self) -> String {
         format!(
@@ -117,7 +129,7 @@ impl Gpu {
     }
 
     /// Largest square texture side the device accepts.
-    pub fn max_texture_side(&self) -> u32 {
+    pub(crate) fn max_texture_side(&self) -> u32 {
         self.device.limits().max_texture_dimension_2d
     }
 }

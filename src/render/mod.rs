@@ -29,7 +29,8 @@ pub use gpu::{Gpu, RenderError};
 pub use resident::{ResidentGeometry, UploadStats};
 pub use upload::GpuMeshes;
 
-use pipelines::{Pipelines, Target, Targets};
+use pipelines::Targets;
+pub(crate) use pipelines::{Globals, Pipelines, Target};
 use upload::{StaticKey, StaticPatch};
 
 use std::collections::HashMap;
@@ -91,7 +92,7 @@ impl Primitives {
     pub const NAMES: &'static str = "auto, list, strips, mts or repair";
 
     /// Whether `m` is drawn as triangle strips.
-    pub fn strips_for(self, m: &PatchMesh) -> bool {
+    pub(crate) fn strips_for(self, m: &PatchMesh) -> bool {
         match self {
             Primitives::List => false,
             Primitives::Auto => m.arcs.is_some(),

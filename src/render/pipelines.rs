@@ -6,17 +6,17 @@ use super::*;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
-pub(super) struct Globals {
-    pub(super) view_proj: [[f32; 4]; 4],
-    pub(super) eye: [f32; 4],
-    pub(super) forward: [f32; 4],
-    pub(super) light: [f32; 4],
-    pub(super) color: [f32; 4],
-    pub(super) mode: [u32; 4],
+pub(crate) struct Globals {
+    pub(crate) view_proj: [[f32; 4]; 4],
+    pub(crate) eye: [f32; 4],
+    pub(crate) forward: [f32; 4],
+    pub(crate) light: [f32; 4],
+    pub(crate) color: [f32; 4],
+    pub(crate) mode: [u32; 4],
 }
 
 #[derive(Debug)]
-pub(super) struct Pipelines {
+pub(crate) struct Pipelines {
     pub(super) surface: wgpu::RenderPipeline,
     pub(super) surface_strip: wgpu::RenderPipeline,
     pub(super) border: wgpu::RenderPipeline,
@@ -28,10 +28,20 @@ pub(super) struct Pipelines {
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub(super) enum Target {
-    Color { samples: u32 },
+pub(crate) enum Target {
+    Color {
+        samples: u32,
+    },
     Depth,
     Ids,
+    /// A caller's pass ([`crate::embed`]): its colour and depth formats and sample count, and
+    /// the depth test its projection needs (reversed depth tests `GreaterEqual`).
+    External {
+        color: wgpu::TextureFormat,
+        depth: wgpu::TextureFormat,
+        samples: u32,
+        compare: wgpu::CompareFunction,
+    },
 }
 
 pub(super) const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
@@ -68,6 +78,7 @@ impl Targets {
         let (format, samples) = match target {
             Target::Color { samples } => (COLOR_FORMAT, samples),
             Target::Depth | Target::Ids => (LINEAR_DEPTH_FORMAT, 1),
+            Target::External { color, samples, .. } => (color, samples),
         };
         let device = &gpu.device;
         let size = wgpu::Extent3d {
@@ -131,7 +142,12 @@ impl Targets {
 }
 
 impl Renderer {
-    pub(super) fn pipelines(&mut self, target: Target) -> &Pipelines {
+    /// The pipelines of `target`, if built.
+    pub(crate) fn built_pipelines(&self, target: Target) -> Option<&Pipelines> {
+        self.pipelines.get(&target)
+    }
+
+    pub(crate) fn pipelines(&mut self, target: Target) -> &Pipelines {
         if !self.pipelines.contains_key(&target) {
             let p = self.build_pipelines(target);
             self.pipelines.insert(target, p);
@@ -144,6 +160,11 @@ impl Renderer {
             Target::Color { samples } => (COLOR_FORMAT, samples, "fs_color"),
             Target::Depth => (LINEAR_DEPTH_FORMAT, 1, "fs_depth"),
             Target::Ids => (LINEAR_DEPTH_FORMAT, 1, "fs_id"),
+            Target::External { color, samples, .. } => (color, samples, "fs_color"),
+        };
+        let (depth_format, depth_compare) = match target {
+            Target::External { depth, compare, .. } => (depth, compare),
+            _ => (DEPTH_FORMAT, wgpu::CompareFunction::LessEqual),
         };
         let surface_attrs = wgpu::vertex_attr_array![
             0 => Float32x3, 1 => Float32x3, 2 => Uint32, 3 => Unorm8x4
@@ -196,9 +217,9 @@ impl Renderer {
                         ..Default::default()
                     },
                     depth_stencil: Some(wgpu::DepthStencilState {
-                        format: DEPTH_FORMAT,
+                        format: depth_format,
                         depth_write_enabled: Some(true),
-                        depth_compare: Some(wgpu::CompareFunction::LessEqual),
+                        depth_compare: Some(depth_compare),
                         stencil: Default::default(),
                         bias: Default::default(),
                     }),

@@ -9,7 +9,7 @@
 //!
 //! **Design.** Four streams (surface vertices, surface list indices, strip indices, fat-border
 //! points — one [`super::BorderPoint`] per border vertex, expanded in the vertex shader), each
-//! a [`pool::Pool`]: one `wgpu::Buffer` suballocated by an [`Allocator`] (first fit over a
+//! a `pool::Pool`: one `wgpu::Buffer` suballocated by an [`Allocator`] (first fit over a
 //! coalesced free list). The four pools form an **arena**; a patch's streams all live in one
 //! arena (its indices refer to that arena's vertices). A pool that runs out of free units
 //! grows by reallocation: a new buffer at least 1.5× larger, the old contents copied on the
@@ -36,7 +36,7 @@
 //! when the generation changed: per stream, in patch order, ranges adjacent in the same
 //! arena merged into one draw. Re-tessellated patches land wherever first fit puts them, so
 //! the draws split over the frames (on grid32, 20 000 after ten frames, each ~35 µs on
-//! lavapipe); past [`PACK_DRAWS`] the pools are packed with the drawn patches in front, in
+//! lavapipe); past `PACK_DRAWS` the pools are packed with the drawn patches in front, in
 //! draw order — a GPU-side copy, the indices keep their values — and each stream is one draw
 //! per arena again. Strips are stored as self-contained blocks that concatenate: ending in a
 //! restart (primitive restart), or, joined by zero-area windows ([`Join::Degenerate`]),
@@ -46,7 +46,7 @@
 //! (`Gpu::indirect`) the ranges become one `DrawIndexedIndirectArgs` (surfaces) or three
 //! `DrawIndirectArgs` (fat borders, one per variant) each, written once per rebuild, and each
 //! run of one arena is one `multi_draw_*_indirect`; otherwise a loop of draws. Mesh-patch
-//! cuts drawn from their hierarchies' static buffers ([`Renderer::draws_static`]) keep that
+//! cuts drawn from their hierarchies' static buffers (`Renderer::draws_static`) keep that
 //! path; only their fat borders are resident.
 //!
 //! The result is the same picture as [`Renderer::upload`] bit for bit: the same triangles
@@ -150,7 +150,7 @@ impl ResidentMemory {
     }
 
     /// Bytes in live ranges and records.
-    pub fn used_total(&self) -> u64 {
+    pub(crate) fn used_total(&self) -> u64 {
         self.used.iter().sum::<u64>() + self.records_used
     }
 }
@@ -754,7 +754,7 @@ impl ResidentGeometry {
         self.draws.draw_count()
     }
 
-    /// Of which fat-border draws (of at most [`PATTERN_POINTS`] points; three indirect
+    /// Of which fat-border draws (of at most `PATTERN_POINTS` points; three indirect
     /// arguments each, one per variant).
     pub fn border_draw_count(&self) -> usize {
         self.draws.ranges[POINTS].len()

@@ -25,7 +25,7 @@ fn clean(s: &str) -> String {
 }
 
 /// One point's row, columns as [`CSV_HEADER`] (the model's name and the failure through
-/// [`clean`]).
+/// `clean`).
 pub fn csv_row(p: &ScalePoint) -> String {
     let model: String = p
         .model

@@ -660,7 +660,7 @@ impl TunnelStrips {
         self.stats.tunnels - before
     }
 
-    /// Appends the strips to `out` (joined by [`RESTART`]); returns how many were written.
+    /// Appends the strips to `out` (joined by [`RESTART`](super::RESTART)); returns how many were written.
     pub fn write_indices(&mut self, out: &mut Vec<u32>) -> usize {
         self.seen_epoch = self.seen_epoch.wrapping_add(1);
         let done = self.seen_epoch;

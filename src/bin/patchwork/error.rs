@@ -109,6 +109,16 @@ pub enum CliError {
     Stdin { reason: String },
     #[error(transparent)]
     Merge(#[from] patchwork::model::merge::MergeError),
+    #[error(transparent)]
+    Shard(#[from] crate::shard::ShardError),
+    #[error(transparent)]
+    MergeShards(#[from] crate::cmd::merge::MergeError),
+    /// A file's error as a shard recorded it (`merge`), reported as the unsharded run did.
+    #[error("{0}")]
+    Recorded(String),
+    /// `check --files-from` with an empty list and no file given.
+    #[error("{}: lists no model file", .list.display())]
+    NoFiles { list: PathBuf },
     #[error("{failed} of {total} files failed (each error above)")]
     FilesFailed { failed: usize, total: usize },
     #[error("bench --flythrough takes one model file, got {0}")]

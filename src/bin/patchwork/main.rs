@@ -1,4 +1,4 @@
-//! `patchwork` command line: render, stats, check, export, bench, view, implode.
+//! `patchwork` command line: render, stats, check, merge, export, bench, view, implode.
 //!
 //! Thin: each command lives in `cmd/<name>.rs` (its flags, checks, library calls, printing);
 //! shared flag groups and their checks in `args.rs`; errors in `error.rs`; where output goes
@@ -10,6 +10,7 @@ mod args;
 mod cmd;
 mod error;
 mod out;
+mod shard;
 
 use std::process::ExitCode;
 
@@ -45,6 +46,10 @@ enum Command {
     Stats(cmd::stats::StatsArgs),
     /// Render random views with fat borders off and on and count crack and growth pixels.
     Check(cmd::check::CheckArgs),
+    /// Combine the shards of a sharded run (`check --shard I/N`, `bench --scale --shard I/N`):
+    /// the unsharded run's output and exit code, or exit 2 when a shard is missing, given
+    /// twice or of another run.
+    Merge(cmd::merge::MergeArgs),
     /// Write the tessellation as binary glTF (.glb): one mesh per part, one node per placement.
     Export(cmd::export::ExportArgs),
     /// Benchmarks: `--flythrough` drives a recorded camera path through the LOD frame loop;
@@ -95,6 +100,7 @@ fn main() -> ExitCode {
         Command::Render(a) => cmd::render::run(a),
         Command::Stats(a) => cmd::stats::run(a),
         Command::Check(a) => cmd::check::run(a),
+        Command::Merge(a) => cmd::merge::run(a),
         Command::Export(a) => cmd::export::run(a).map(|()| true),
         Command::Bench(a) => cmd::bench::run(a),
         Command::ScalePoint(a) => cmd::bench::run_scale_point(a).map(|()| true),

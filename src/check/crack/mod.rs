@@ -69,6 +69,16 @@ impl CrackCounts {
     pub fn cracks(&self) -> usize {
         self.background + self.behind
     }
+
+    /// Adds `other`'s counts (pixels summed, the largest growth distance kept): the total of
+    /// several images.
+    pub fn add(&mut self, other: &CrackCounts) {
+        self.inside += other.inside;
+        self.background += other.background;
+        self.behind += other.behind;
+        self.growth += other.growth;
+        self.growth_max_px = self.growth_max_px.max(other.growth_max_px);
+    }
 }
 
 /// Reference meshes for `view`, welded along shared borders. Bézier patches: one shared
@@ -404,6 +414,9 @@ pub fn random_view(scene: &Scene, seed: u64, index: usize, size: (u32, u32), fov
 #[derive(Clone, Debug)]
 pub struct CheckOptions {
     pub views: usize,
+    /// Run only these of the `views` random views (their indices, in this order): one shard
+    /// of a run split between machines. `None`: views `0..views`.
+    pub only_views: Option<Vec<usize>>,
     pub seed: u64,
     pub pixel_error: f64,
     pub size: (u32, u32),
@@ -423,12 +436,16 @@ pub struct CheckOptions {
     pub narrowed_width: Option<f64>,
     /// Where to write `view{i}-fb{v}-actual.png` / `-diff.png` for images with cracks.
     pub save_failures: Option<PathBuf>,
+    /// Put before every saved image's name (`{prefix}view{i}-fb{v}-actual.png`): names that
+    /// stay apart when the images of several files or machines meet in one folder.
+    pub failure_prefix: String,
 }
 
 impl Default for CheckOptions {
     fn default() -> Self {
         CheckOptions {
             views: 20,
+            only_views: None,
             seed: 1,
             pixel_error: crate::view::DEFAULT_PIXEL_ERROR,
             size: (512, 384),
@@ -443,6 +460,17 @@ impl Default for CheckOptions {
             stress: false,
             narrowed_width: None,
             save_failures: None,
+            failure_prefix: String::new(),
+        }
+    }
+}
+
+impl CheckOptions {
+    /// The indices of the views to run: [`CheckOptions::only_views`], else `0..views`.
+    pub fn view_indices(&self) -> Vec<usize> {
+        match &self.only_views {
+            Some(only) => only.clone(),
+            None => (0..self.views).collect(),
         }
     }
 }
@@ -473,11 +501,7 @@ fn sum_counts<'a>(
     let mut t = CrackCounts::default();
     for (fb, c) in counts {
         if *fb == variant {
-            t.inside += c.inside;
-            t.background += c.background;
-            t.behind += c.behind;
-            t.growth += c.growth;
-            t.growth_max_px = t.growth_max_px.max(c.growth_max_px);
+            t.add(c);
         }
     }
     t
@@ -604,7 +628,8 @@ pub fn narrow_fat_borders(meshes: &mut [PatchMesh], factor: f64) {
     }
 }
 
-/// Renders `opts.views` random views of `scene` and counts cracks and growth per variant.
+/// Renders `opts.views` random views of `scene` (or those of [`CheckOptions::only_views`];
+/// view `i` is the same view whichever others run) and counts cracks and growth per variant.
 /// `on_view` is called after each view (progress).
 pub fn run_check(
     renderer: &mut Renderer,
@@ -625,7 +650,7 @@ pub fn run_check_with(
     mut on_view: impl FnMut(&ViewResult),
 ) -> Result<CheckReport, CheckError> {
     let mut report = CheckReport::default();
-    for index in 0..opts.views {
+    for index in opts.view_indices() {
         let view = random_view(scene, opts.seed, index, opts.size, opts.fov_y)
             .with_ortho(opts.ortho, &scene.bounds);
         let (ref_meshes, grid) = reference_meshes(scene, &view, opts.pixel_error);
@@ -651,7 +676,11 @@ pub fn run_check_with(
             if let Some(dir) = &opts.save_failures
                 && verdict.failed()
             {
-                let stem = format!("view{index:03}-fb{}{tag}", variant.name());
+                let stem = format!(
+                    "{}view{index:03}-fb{}{tag}",
+                    opts.failure_prefix,
+                    variant.name()
+                );
                 // Asked for and not written: an error, not a lost diagnostic.
                 verdict.save(dir, &stem)?;
             }

@@ -1,5 +1,5 @@
 //! IGES 5.3 reader: every trimmed surface (144) and every untrimmed B-spline surface (128)
-//! that no trimmed surface uses becomes a [`TrimmedFace`], in the same [`StepModel`] the STEP
+//! that no trimmed surface uses becomes a [`TrimmedFace`](crate::model::trimmed::TrimmedFace), in the same [`StepModel`] the STEP
 //! reader produces, so that probing, placement, tessellation, fat borders, the crack and
 //! fidelity checks and export run unchanged.
 //!

@@ -79,7 +79,7 @@ impl TrimmedFace {
     /// As [`SurfaceEval::project`] for a point that should lie on the surface (a point of a
     /// trim curve, a vertex of a tessellation): when the nearest point found is farther than
     /// `tol`, the range is searched again on a grid fine enough to step on every sheet nearer
-    /// than that ([`TrimmedFace::fine_guesses`]), and the nearer result kept. Returns the
+    /// than that (`TrimmedFace::fine_guesses`), and the nearer result kept. Returns the
     /// parameter and whether the fine search ran.
     pub fn project_on(&self, p: DVec3, hint: Option<DVec2>, tol: f64) -> (Option<DVec2>, bool) {
         let first = self.project(p, hint);

@@ -4,7 +4,9 @@
 //! `patchwork bench --scale [FILE...]`: teapot grids from 10³ to 10⁶ patches and the files
 //! given, each point measured by `drive::scale::run_point` in a child process of this binary
 //! (the hidden `scale-point` command), so each point's resident peak is its own; a Markdown
-//! table, and a CSV with `--csv`. Exit code 1 when a point failed.
+//! table, and a CSV with `--csv`. Exit code 1 when a point failed. `--scale --shard I/N`
+//! measures only the points of that shard (ids `grid#N`, `file#PATH`, assigned as
+//! `check`'s cases are: `crate::shard`) and writes them for `patchwork merge`.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -30,6 +32,7 @@ use crate::args::{
 };
 use crate::error::CliError;
 use crate::out::{self, data, note};
+use crate::shard;
 
 #[derive(Args, Debug)]
 pub struct BenchArgs {
@@ -96,6 +99,15 @@ pub struct BenchArgs {
     #[arg(long)]
     strip_joins: Option<Join>,
 
+    /// `--scale`: measure one shard of the points (grids and files): `I/N` (1-based) or
+    /// `auto` / `auto/N` from the batch engine's environment, as `check --shard`; the shard's
+    /// rows go to --out for `patchwork merge` (stdout holds the table). Points measured on
+    /// different machines compare only as far as the machines do.
+    #[arg(long, value_name = "I/N|auto[/N]", value_parser = shard::parse_spec, requires = "scale")]
+    shard: Option<shard::ShardSpec>,
+    /// With --shard: write the shard's points (JSON) to this file (temporary name, renamed).
+    #[arg(short, long, requires = "shard")]
+    out: Option<PathBuf>,
     /// Per-frame CSV (`--flythrough`, default flythrough.csv); the table as CSV (`--scale`,
     /// only when given).
     #[arg(long)]
@@ -289,7 +301,24 @@ pub fn run(args: &BenchArgs) -> Result<bool, CliError> {
     Ok(crack_free)
 }
 
-/// `--scale`: every point in a child process (`scale-point`), then the table.
+/// The id of a `bench --scale` point: `grid#N` for an N×N teapot grid, `file#PATH` (as given).
+pub fn scale_case_id(source: &Source) -> String {
+    match source {
+        Source::Grid(n) => format!("grid#{n}"),
+        Source::File(f) => format!("file#{}", f.display()),
+    }
+}
+
+/// The line above the table (what every point was measured with).
+pub fn scale_heading(frames: usize, size: (u32, u32), pixel_error: f64, budget_ms: f64) -> String {
+    format!(
+        "scale sweep: {frames} frames per point at {}x{}, pixel error {pixel_error}, budget {budget_ms} ms; each point in its own process",
+        size.0, size.1
+    )
+}
+
+/// `--scale`: every point (of the shard, with `--shard`) in a child process (`scale-point`),
+/// then the table.
 fn run_scale(args: &BenchArgs) -> Result<bool, CliError> {
     fov_y(args.fov)?;
     pixel_error(args.pixel_error)?;
@@ -304,6 +333,26 @@ fn run_scale(args: &BenchArgs) -> Result<bool, CliError> {
         );
     }
     sources.extend(args.files.iter().cloned().map(Source::File));
+    let all: Vec<String> = sources.iter().map(scale_case_id).collect();
+    let shard = match args.shard {
+        Some(spec) => {
+            let (shard, from) = shard::resolve(spec, |v| std::env::var(v).ok())?;
+            if let Some(variable) = from {
+                note!("shard {shard} (from {variable})");
+            }
+            Some(shard)
+        }
+        None => None,
+    };
+    let mine: Vec<&Source> = sources
+        .iter()
+        .zip(&all)
+        .filter(|(_, id)| shard.is_none_or(|s| shard::shard_of(id, s.total) == s.index))
+        .map(|(source, _)| source)
+        .collect();
+    if let Some(shard) = shard {
+        data!("shard {shard}: {} of {} points", mine.len(), all.len());
+    }
     let exe = std::env::current_exe().map_err(|source| CliError::Io {
         path: PathBuf::from("patchwork"),
         source,
@@ -313,21 +362,26 @@ fn run_scale(args: &BenchArgs) -> Result<bool, CliError> {
         path: work_dir.clone(),
         source,
     })?;
-    let pb = progress(sources.len(), "points");
+    let pb = progress(mine.len(), "points");
     pb.enable_steady_tick(std::time::Duration::from_millis(500));
     let mut points = Vec::new();
+    let mut cases = Vec::new();
     let mut failed = 0;
-    for source in &sources {
+    for source in mine {
         pb.set_message(source.label());
         let point = measure_in_child(&exe, source, args, frames, &work_dir);
         pb.inc(1);
+        let id = scale_case_id(source);
         match point {
             Ok(p) => {
-                pb.suspend(|| note!("{}", scale_report::csv_row(&p)));
+                let row = scale_report::csv_row(&p);
+                pb.suspend(|| note!("{row}"));
+                cases.push(json!({ "id": id, "row": row }));
                 points.push(p);
             }
             Err(e) => {
                 pb.suspend(|| eprintln!("error: {e}"));
+                cases.push(json!({ "id": id, "error": e.to_string() }));
                 failed += 1;
             }
         }
@@ -335,16 +389,35 @@ fn run_scale(args: &BenchArgs) -> Result<bool, CliError> {
     pb.finish_and_clear();
     let _ = std::fs::remove_dir_all(&work_dir);
     data!(
-        "scale sweep: {frames} frames per point at {}x{}, pixel error {}, budget {} ms; each point in its own process",
-        args.size.0,
-        args.size.1,
-        args.pixel_error,
-        args.budget.budget_ms
+        "{}",
+        scale_heading(frames, args.size, args.pixel_error, args.budget.budget_ms)
     );
     crate::out::write(format_args!("{}", scale_report::markdown(&points)));
     if let Some(csv) = &args.csv {
         png::write_text(csv, &scale_report::csv(&points))?;
         data!("wrote {}", csv.display());
+    }
+    if let Some(shard) = shard {
+        let value = json!({
+            "format": shard::FORMAT,
+            "shard": { "index": shard.index, "total": shard.total },
+            "run": {
+                "command": "bench-scale",
+                "cases": all,
+                "frames": frames,
+                "size": [args.size.0, args.size.1],
+                "pixel_error": args.pixel_error,
+                "budget_ms": args.budget.budget_ms,
+                "options": { "fov": args.fov },
+            },
+            "cases_total": all.len(),
+            "cases_fingerprint": shard::fingerprint(all.iter().map(String::as_str)),
+            "cases": cases,
+        });
+        if let Some(path) = &args.out {
+            png::write_text(path, &format!("{value}\n"))?;
+            note!("wrote {}", path.display());
+        }
     }
     Ok(failed == 0)
 }

@@ -5,6 +5,7 @@ pub mod bench;
 pub mod check;
 pub mod export;
 pub mod implode;
+pub mod merge;
 pub mod render;
 pub mod stats;
 #[cfg(feature = "viewer")]
