@@ -116,23 +116,54 @@ fn separating_side(piece: &Piece, tri: &Piece) -> Option<(DVec3, DVec3)> {
 /// Cuts `piece` by the plane (`origin`, `normal`) into the parts on either side, each
 /// triangulated as a fan from its first corner.
 fn clip(piece: &Piece, origin: DVec3, normal: DVec3, out: &mut Vec<Piece>) {
-    let side = piece.map(|p| normal.dot(p - origin));
-    for sign in [1.0, -1.0] {
-        let mut poly: Vec<DVec3> = Vec::with_capacity(4);
-        for k in 0..3 {
-            let (p, q) = (piece[k], piece[(k + 1) % 3]);
-            let (sp, sq) = (side[k] * sign, side[(k + 1) % 3] * sign);
+    for side in [normal, -normal] {
+        let part = Polygon::triangle(piece).clip(origin, side);
+        let c = part.corners();
+        for k in 1..c.len().saturating_sub(1) {
+            out.push([c[0], c[k], c[k + 1]]);
+        }
+    }
+}
+
+/// A convex polygon: a triangle clipped by at most five planes (each adds at most one
+/// corner), kept on the stack.
+#[derive(Clone, Copy)]
+struct Polygon {
+    corners: [DVec3; 8],
+    len: usize,
+}
+
+impl Polygon {
+    fn triangle(t: &Piece) -> Polygon {
+        let mut corners = [DVec3::ZERO; 8];
+        corners[..3].copy_from_slice(t);
+        Polygon { corners, len: 3 }
+    }
+
+    fn corners(&self) -> &[DVec3] {
+        &self.corners[..self.len]
+    }
+
+    /// The part where `normal · (p − origin) ≥ 0` (empty when there is none).
+    fn clip(&self, origin: DVec3, normal: DVec3) -> Polygon {
+        let mut out = Polygon {
+            corners: [DVec3::ZERO; 8],
+            len: 0,
+        };
+        let c = self.corners();
+        for k in 0..c.len() {
+            let (p, q) = (c[k], c[(k + 1) % c.len()]);
+            let (sp, sq) = (normal.dot(p - origin), normal.dot(q - origin));
             if sp >= 0.0 {
-                poly.push(p);
+                out.corners[out.len] = p;
+                out.len += 1;
             }
             if (sp > 0.0 && sq < 0.0) || (sp < 0.0 && sq > 0.0) {
-                let t = sp / (sp - sq);
-                poly.push(p + (q - p) * t);
+                out.corners[out.len] = p + (q - p) * (sp / (sp - sq));
+                out.len += 1;
             }
         }
-        for k in 1..poly.len().saturating_sub(1) {
-            out.push([poly[0], poly[k], poly[k + 1]]);
-        }
+        out
     }
 }
 
@@ -176,41 +207,28 @@ pub(super) fn height_over(
     let mut covered = false;
     let mut worst = 0.0f64;
     edges.clear();
-    let mut poly: Vec<DVec3> = Vec::with_capacity(8);
-    let mut next: Vec<DVec3> = Vec::with_capacity(8);
     for (o, ids) in originals {
         let facing = n.dot((o[1] - o[0]).cross(o[2] - o[0])) > 0.0;
         for k in 0..3 {
             let (u, v) = (ids[k], ids[(k + 1) % 3]);
             edges.push(((u.min(v), u.max(v)), facing, o[k], o[(k + 1) % 3]));
         }
-        poly.clear();
-        poly.extend_from_slice(o);
+        let mut part = Polygon::triangle(o);
         for &(origin, inward) in &sides {
-            next.clear();
-            for k in 0..poly.len() {
-                let (p, q) = (poly[k], poly[(k + 1) % poly.len()]);
-                let (sp, sq) = (inward.dot(p - origin), inward.dot(q - origin));
-                if sp >= 0.0 {
-                    next.push(p);
-                }
-                if (sp > 0.0 && sq < 0.0) || (sp < 0.0 && sq > 0.0) {
-                    next.push(p + (q - p) * (sp / (sp - sq)));
-                }
-            }
-            std::mem::swap(&mut poly, &mut next);
-            if poly.is_empty() {
+            part = part.clip(origin, inward);
+            if part.len == 0 {
                 break;
             }
         }
-        if poly.is_empty() {
+        if part.len == 0 {
             continue;
         }
         // Part of it is over `tri`: it must face the same way.
         if !facing {
             return None;
         }
-        worst = poly
+        worst = part
+            .corners()
             .iter()
             .map(|p| n.dot(*p - a).abs())
             .fold(worst, f64::max);

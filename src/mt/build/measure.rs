@@ -47,15 +47,18 @@ impl Builder {
     ///   whose bound is loose is split along the side of its triangle that it overhangs
     ///   (kept split, at most [`PIECE_DEPTH`] times).
     /// - **Fan → original**, against the original surface near it (the region's pieces and
-    ///   those covered by the live triangles around the fan): every fan triangle is bounded
-    ///   by the convex bound against the one nearest piece, or the corners' distances plus
-    ///   the Lipschitz term; where loose it is split (along the side of that piece, at most
-    ///   [`FAN_DEPTH`] times) and bounded part by part.
+    ///   those covered by the live triangles around the fan): a fan triangle that surface
+    ///   covers without folding is bounded by its height over it ([`Builder::height_bound`]);
+    ///   any other by the convex bound against the one nearest piece, or the corners'
+    ///   distances plus the Lipschitz term, split where loose (along the side of that piece,
+    ///   at most [`FAN_DEPTH`] times) and bounded part by part.
     ///
-    /// "Loose" means above `(1 + `[`SLACK`]`)` times the largest of `inherited` and the
-    /// sampled distances ([`Builder::sample_lower`], true distances at points, so a lower
-    /// bound): a bound within that is taken as it is. What is returned is never below the
-    /// true distance; it is above it by at most `SLACK` except where a depth limit stopped.
+    /// "Loose" means above the bound so far (at least `inherited`) and above `(1 + `[`SLACK`]`)`
+    /// times `lower`: the largest distance measured from a point of the fan or of the region
+    /// to the nearest of the other ([`Builder::sample_lower`], and the corners the bounds
+    /// measure), which no bound of this collapse can be below. Slack over `inherited` would
+    /// compound up the DAG. What is returned is never below the true distance, and above
+    /// `max(inherited, (1 + SLACK) · lower)` only where a depth limit stopped.
     pub(super) fn measure(
         &mut self,
         fan: &[u32],
@@ -100,10 +103,11 @@ impl Builder {
             });
         }
         lower = self.sample_lower(fan, &cands, &cand_groups, lower);
-        // `lower`: true distances found (the collapse's own error is at least that); `worst`:
-        // the bound so far. A bound within `limit` is taken as it is; slack is allowed over
-        // the collapse's own distances only, not over the inherited error (it would compound
-        // from node to node up the DAG: 1.2 allowed over it drew 2–4× the bunny's triangles).
+        // `lower`: distances measured at points (no bound of this collapse is below them);
+        // `worst`: the bound so far. A bound within `limit` is taken as it is; slack is allowed
+        // over the collapse's own distances only, not over the inherited error (it would
+        // compound from node to node up the DAG: 1.2 allowed over it drew 2–4× the bunny's
+        // triangles).
         let mut worst = lower.max(inherited);
         let limit = |worst: f64, lower: f64| worst.max(lower * (1.0 + SLACK));
         // Original → fan: the loose pieces split, the rest kept where assigned.

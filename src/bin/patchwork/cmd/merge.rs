@@ -130,6 +130,20 @@ fn read_shard(path: &Path) -> Result<ShardFile, MergeError> {
 }
 
 /// A check run as a shard file records it.
+/// A JSON list of strings, or `None` when it is not one.
+fn strings(v: &Value) -> Option<Vec<String>> {
+    v.as_array()?
+        .iter()
+        .map(|s| s.as_str().map(str::to_owned))
+        .collect()
+}
+
+/// A JSON `[width, height]` in pixels, or `None` when it is not one.
+fn image_size(v: &Value) -> Option<(u32, u32)> {
+    let side = |k: usize| v[k].as_u64().and_then(|n| u32::try_from(n).ok());
+    Some((side(0)?, side(1)?))
+}
+
 fn parse_run(path: &Path, v: &Value) -> Result<Run, MergeError> {
     let not = |what: &str| MergeError::NotShard {
         path: path.to_owned(),
@@ -138,16 +152,7 @@ fn parse_run(path: &Path, v: &Value) -> Result<Run, MergeError> {
     if v["command"] != "check" {
         return Err(not("command (only `check` runs are sharded)"));
     }
-    let files = v["files"]
-        .as_array()
-        .and_then(|a| a.iter().map(|f| f.as_str().map(str::to_owned)).collect())
-        .ok_or_else(|| not("files"))?;
-    let size = |k| {
-        v["size"][k]
-            .as_u64()
-            .and_then(|n| u32::try_from(n).ok())
-            .ok_or_else(|| not("size"))
-    };
+    let files = strings(&v["files"]).ok_or_else(|| not("files"))?;
     let variants = v["variants"]
         .as_array()
         .and_then(|a| {
@@ -162,7 +167,7 @@ fn parse_run(path: &Path, v: &Value) -> Result<Run, MergeError> {
         pixel_error: v["pixel_error"]
             .as_f64()
             .ok_or_else(|| not("pixel_error"))?,
-        size: (size(0)?, size(1)?),
+        size: image_size(&v["size"]).ok_or_else(|| not("size"))?,
         variants,
         narrowed_width: match &v["narrowed_width"] {
             Value::Null => None,
@@ -406,19 +411,10 @@ fn merge_scale(shards: &[ShardFile]) -> Result<bool, CliError> {
         path: first.path.clone(),
         reason: format!("run.{what} missing or malformed"),
     };
-    let all: Vec<String> = run["cases"]
-        .as_array()
-        .and_then(|a| a.iter().map(|c| c.as_str().map(str::to_owned)).collect())
-        .ok_or_else(|| not("cases"))?;
-    let size = |k| {
-        run["size"][k]
-            .as_u64()
-            .and_then(|n| u32::try_from(n).ok())
-            .ok_or_else(|| not("size"))
-    };
+    let all = strings(&run["cases"]).ok_or_else(|| not("cases"))?;
     let heading = super::bench::scale_heading(
         run["frames"].as_u64().ok_or_else(|| not("frames"))? as usize,
-        (size(0)?, size(1)?),
+        image_size(&run["size"]).ok_or_else(|| not("size"))?,
         run["pixel_error"]
             .as_f64()
             .ok_or_else(|| not("pixel_error"))?,
