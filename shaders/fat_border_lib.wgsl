@@ -18,6 +18,11 @@ const FB_TINY: f32 = 1e-12;
 // point ε·normalize(t × d)/cos(θ/2): the band stays at least ε wide and the joint fans have
 // zero area (their triangles are not drawn).
 const FB_STRAIGHT: u32 = 8u;
+// Bit 10 of a slot code: the 2-vertex variant, whose v_i2, v_i5 sit at the mitre points
+// ε·normalize(±t × d)/cos(θ/2), the mitre at most FB_MITRE_LIMIT (`render::fat_border::
+// MITRE_FLAG`, `MITRE_LIMIT`).
+const FB_MITRE: u32 = 1024u;
+const FB_MITRE_LIMIT: f32 = 2.75;
 // Bits 4..9 of a slot code (and of a border point's info): the fat border's half-width across
 // the view as q / 63 of ε, q = 0 meaning ε (`render::fat_border::width_bits`).
 const FB_WIDTH_SHIFT: u32 = 4u;
@@ -78,6 +83,13 @@ fn fat_border_position(
         if (slot >= 1u && slot <= 3u) {
             off = fb_side(t, d) * mitre;
         } else if (slot >= 4u && slot <= 6u) {
+            off = fb_side(-t, d) * mitre;
+        }
+    } else if ((code & FB_MITRE) != 0u) {
+        let mitre = min(2.0 / max(length(sum), FB_TINY), FB_MITRE_LIMIT);
+        if (slot == 2u) {
+            off = fb_side(t, d) * mitre;
+        } else if (slot == 5u) {
             off = fb_side(-t, d) * mitre;
         }
     } else {
@@ -168,13 +180,11 @@ fn fb_resolve(i: u32, len: u32) -> vec2<u32> {
                 p = p + 1u;
                 s = 6u;
             }
-        } else if (s == 1u) {
+        } else if (s == 1u || s == 4u || s == 5u) {
             p = p + 1u;
             s = 6u;
         } else if (s == 0u || s == 2u) {
             s = 3u;
-        } else if (s == 4u || s == 5u) {
-            s = 6u;
         }
         let info = fb_info(p);
         if ((info & FB_INFO_CLOSING) != 0u) {
@@ -202,6 +212,9 @@ fn fat_border_vertex(i: u32, len: u32, viewer: vec4<f32>) -> vec4<f32> {
     }
     let prev = fb_cur(fb_neighbour(p, false));
     let next = fb_cur(fb_neighbour(p, true));
+    if (len == 6u) {
+        flag = flag | FB_MITRE;
+    }
     let code = r.y | flag | (fb_info(p) & FB_WIDTH_MASK);
     let pos = fat_border_position(prev, fb_cur(p), next, viewer, fb_word_f(p, 3u), code);
     return vec4<f32>(pos, bitcast<f32>(p));
@@ -254,6 +267,9 @@ fn fat_border_vertex_placed(
     let next = fb_place(m, fb_cur(fb_neighbour(p, true)));
     let cur = fb_place(m, fb_cur(p));
     let eps = fb_word_f(p, 3u) + eps_added;
+    if (len == 6u) {
+        flag = flag | FB_MITRE;
+    }
     var code = r.y | flag;
     if (eps_added == 0.0) {
         code = code | (fb_info(p) & FB_WIDTH_MASK);

@@ -21,10 +21,12 @@
 //!
 //! Measured (`tests/cracks.rs`, 4 views at 384×288, 0.5 px): every model of the crack suite
 //! shows hundreds to thousands of crack pixels without fat borders, 82–384 with the 6-vertex
-//! fat borders at half width, and at most one per view at full width — a pixel centre on the
-//! T-junction that the 6- and 4-vertex templates have at v_i (the fan apex on the middle of
-//! the segment quad's edge v_i1–v_i4). The 2-vertex variant is ε·cos(θ/2) wide at a joint
-//! turning by θ and lets a few pixels through at patch corners.
+//! fat borders at half width, and none at full width (there was one a view or so while the
+//! fans had their apex on the T-junction at v_i, see `render::fat_border`). The paper's
+//! 2-vertex variant is ε·cos(θ/2) wide at a joint turning by θ; ours is mitred
+//! (`render::fat_border::MITRE_LIMIT`), and still lets a few pixels through at the sharp
+//! corners of mesh borders (`check --stress`, 20 views: bunny 6, alien 30, cakeBirthday 261
+//! crack pixels, from 71, 126 and 2 017 unmitred).
 //!
 //! Fat borders are drawn [`PatchMesh::border_width`] wide (a Bézier patch's measured border
 //! error, not ε): the retreat adds the distance moved to the border error, so the stress

@@ -11,6 +11,17 @@
 //! * 4 vertices: the same without v_i2, v_i5 (4 triangles);
 //! * 2 vertices: only v_i2, v_i5, one quad per segment (2 triangles).
 //!
+//! **No T-junctions.** The paper's fans have their apex at v_i, the midpoint of the segment
+//! quad's edge v_i1–v_i4 (and of the previous quad's v_i3–v_i6): a T-junction, where the
+//! rasterizer's shared-edge rule does not hold and a pixel centre on the seam could stay
+//! uncovered (one per view or so under `check --stress`). Here the fans are drawn from the
+//! far end of that edge instead — v_i3–v_i2–v_i1 from v_i4 and v_i6–v_i5–v_i4 from v_i1 —
+//! so each fan shares the whole edge v_i1–v_i4 with the quad. The displaced vertices lie on
+//! the circle of radius ε about v_i in the plane across the view, in angular order, so each
+//! fan is convex, holds the paper's fan (its apex v_i is on the fan's edge v_i1–v_i4) and
+//! reaches nothing farther than ε from v_i; the previous quad's edge v_i3–v_i6 runs inside
+//! the two fans.
+//!
 //! **Straight joints** (the polyline turns by less than 8°, [`STRAIGHT_COS`]): v_i1, v_i2, v_i3
 //! (and v_i4, v_i5, v_i6) all become the mitre point `ε·normalize(t_i × d_i) / cos(θ/2)`. The band
 //! is then at least ε wide perpendicular to both segments and covers the fan's round wedge (the
@@ -90,17 +101,18 @@ const TEMPLATE_6: [u32; 18] = [
     c(0, 1),
     c(1, 6),
     c(1, 3),
-    // joint fans around v_i
-    c(0, 0),
+    // joint fans around v_i, from the far end of the segment quad's edge v_i1–v_i4 (see
+    // `FAN_APEXES`)
+    c(0, 4),
     c(0, 3),
     c(0, 2),
-    c(0, 0),
+    c(0, 4),
     c(0, 2),
     c(0, 1),
-    c(0, 0),
+    c(0, 1),
     c(0, 6),
     c(0, 5),
-    c(0, 0),
+    c(0, 1),
     c(0, 5),
     c(0, 4),
 ];
@@ -112,10 +124,10 @@ const TEMPLATE_4: [u32; 12] = [
     c(0, 1),
     c(1, 6),
     c(1, 3),
-    c(0, 0),
+    c(0, 4),
     c(0, 3),
     c(0, 1),
-    c(0, 0),
+    c(0, 1),
     c(0, 6),
     c(0, 4),
 ];
@@ -137,10 +149,10 @@ pub fn decode(code: u32) -> (u32, u32) {
     ((code >> 3) & 1, code & 7)
 }
 
-/// A fan triangle: it contains v_i itself (slot 0 at end 0).
+/// A fan triangle: all its corners are v_i's (the segment quad reaches v_{i+1}).
 #[cfg(test)]
 fn is_fan(tri: &[u32]) -> bool {
-    tri.contains(&c(0, 0))
+    tri.iter().all(|&code| decode(code).0 == 0)
 }
 
 const TINY: f32 = 1e-12;
@@ -149,6 +161,12 @@ const TINY: f32 = 1e-12;
 pub const STRAIGHT_COS: f32 = 0.99;
 /// Flag in a slot code (bit 3): the border vertex's joint is straight (`FB_STRAIGHT` in WGSL).
 pub const STRAIGHT_FLAG: u32 = 8;
+/// Flag in a slot code (bit 10): the 2-vertex variant's draw, whose v_i2 and v_i5 sit at the
+/// mitre points at every joint (`FB_MITRE` in WGSL; see [`expand`]).
+pub const MITRE_FLAG: u32 = 1 << 10;
+/// Longest mitre of the 2-vertex variant, in half-widths: joints turning by up to
+/// 2·acos(1 / `MITRE_LIMIT`) ≈ 137° get the whole mitre, sharper ones this much.
+pub const MITRE_LIMIT: f32 = 2.75;
 
 fn normalize_or(v: Vec3, fallback: Vec3) -> Vec3 {
     let l2 = v.dot(v);
@@ -203,7 +221,8 @@ pub(crate) fn width_bits(width: f64, eps: f64) -> u32 {
 }
 
 /// CPU twin of `fat_border_position` (WGSL). `code` = slot (0 = v_i pushed back, 1..6 = eq.
-/// (1)–(6)) plus [`STRAIGHT_FLAG`] for a straight joint plus the half-width across the view
+/// (1)–(6)) plus [`STRAIGHT_FLAG`] for a straight joint plus [`MITRE_FLAG`] in the 2-vertex
+/// variant's draw plus the half-width across the view
 /// as a fraction of ε in [`WIDTH_MASK`] (`width_bits`; 0 = ε; the push-back along the view is
 /// always ε). `viewer` is the viewer in
 /// homogeneous coordinates ([`crate::view::View::viewer`]): `(eye, 1)` under perspective, the
@@ -223,6 +242,16 @@ pub fn expand(prev: Vec3, cur: Vec3, next: Vec3, viewer: Vec4, eps: f32, code: u
         match slot {
             1..=3 => side(t, d) * mitre,
             4..=6 => side(-t, d) * mitre,
+            _ => Vec3::ZERO,
+        }
+    } else if code & MITRE_FLAG != 0 {
+        // The 2-vertex variant has no fans: its band is ε·cos(θ/2) wide at a joint turning by
+        // θ at the bisector points, and let pixels through at the corners of zigzag mesh
+        // borders; at the mitre points it holds the whole ε-neighbourhood of both segments.
+        let mitre = (2.0 / sum.length().max(TINY)).min(MITRE_LIMIT);
+        match slot {
+            2 => side(t, d) * mitre,
+            5 => side(-t, d) * mitre,
             _ => Vec3::ZERO,
         }
     } else {
@@ -334,9 +363,8 @@ pub fn resolve(points: &[BorderPoint], variant: FatBorders, i: usize) -> (usize,
     let two = variant == FatBorders::Two;
     if point(points, p).info & INFO_CLOSING != 0 {
         (p, s) = match (two, s) {
-            (true, 2 | 5) | (false, 1) => (p.wrapping_add(1), 6),
+            (true, 2 | 5) | (false, 1 | 4 | 5) => (p.wrapping_add(1), 6),
             (false, 0 | 2) => (p, 3),
-            (false, 4 | 5) => (p, 6),
             _ => (p, s),
         };
         let info = point(points, p).info;
@@ -388,11 +416,23 @@ fn pulled(
     } else {
         0
     };
+    let mitre = if variant == FatBorders::Two {
+        MITRE_FLAG
+    } else {
+        0
+    };
     let at = |k: usize| moved(Vec3::from(point(points, k).cur));
     let (prev, next) = (neighbour(points, p, false), neighbour(points, p, true));
     let eps = q.eps + eps_added;
     (
-        expand(at(prev), at(p), at(next), viewer, eps, slot | flag | width),
+        expand(
+            at(prev),
+            at(p),
+            at(next),
+            viewer,
+            eps,
+            slot | flag | width | mitre,
+        ),
         p,
     )
 }
