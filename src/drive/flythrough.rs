@@ -84,7 +84,19 @@ pub struct FrameRecord {
     pub uploaded_bytes: u64,
     pub retessellated: usize,
     pub from_cache: usize,
+    /// Trimmed faces whose tessellation held the wanted level (relabelled, not made).
+    pub reused: usize,
     pub queue_left: usize,
+    /// Of `queue_left`, the trimmed faces still waiting.
+    pub trimmed_waiting: usize,
+    /// Tessellations made this frame (a shared surface once), the worker time they took
+    /// (summed over the workers) and their triangles (`lod::UpdateStats::made`).
+    pub made: usize,
+    pub made_cpu_ms: f64,
+    pub made_triangles: usize,
+    /// Of `made`, redone work: levels the loop had made before and dropped.
+    pub redone: usize,
+    pub redone_cpu_ms: f64,
     /// Screen-space error of the patches visible in this frame, pixels.
     pub max_error_px: f64,
     pub p99_error_px: f64,
@@ -112,7 +124,14 @@ impl FrameRecord {
             uploaded_bytes: r.uploaded_bytes,
             retessellated: r.stats.retessellated,
             from_cache: r.stats.from_cache,
+            reused: r.stats.reused,
             queue_left: r.stats.queue_left,
+            trimmed_waiting: r.stats.trimmed_left,
+            made: r.stats.made,
+            made_cpu_ms: r.stats.made_cpu.as_secs_f64() * 1e3,
+            made_triangles: r.stats.made_triangles,
+            redone: r.stats.redone,
+            redone_cpu_ms: r.stats.redone_cpu.as_secs_f64() * 1e3,
             max_error_px: r.max_error_px,
             p99_error_px: r.p99_error_px,
             triangles: r.stats.triangles,

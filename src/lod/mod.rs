@@ -3,17 +3,24 @@
 //! After Balázs, Guthe and Klein, "Fat Borders" (2004), §4.2: per frame, only patches visible
 //! in the previous frame (patch-ID buffer) and inside the frustum are considered; those whose
 //! current tessellation error ε_c is off the error the view now wants, ε_w, go into a priority
-//! queue with weight
+//! queue, and are re-tessellated from the top until the frame's time budget (default 40 ms,
+//! as in the paper) is spent, by the rayon workers, which take the jobs in queue order. Fat
+//! borders always use each patch's *current* ε_c, so the picture stays crack-free while the
+//! queue catches up.
 //!
-//! ```text
-//! w = (ε_c / ε_w)²   if ε_c > ε_w   (too coarse: visible error, urgent)
-//! w =  ε_w / ε_c     if ε_c < ε_w   (too fine: only wastes triangles)
-//! ```
+//! **Order** ([`priority`]). The paper weighs a patch by (ε_c/ε_w)² when too coarse and by
+//! ε_w/ε_c when too fine, so a patch far too fine could go before one slightly too coarse,
+//! and a tiny patch before a large one. Here the queue takes the patches that are too coarse
+//! first, by what their error shows: screen error (pixels, γ·ε_c/ε_w) × screen area
+//! (pixels², the bounding sphere's disc, π(γ·r/ε_w)²), so a frame the budget cuts short still
+//! fixes what is most visible; the patches that are only too fine (no visible error, only
+//! triangles to save) come after all of them, the most wasteful first.
 //!
-//! (the paper's ε_act is our current ε_c, its ε_c our wanted ε_w), and are re-tessellated from
-//! the top until the frame's time budget (default 40 ms, as in the paper) is spent, by the
-//! rayon workers, which take the jobs in queue order. Fat borders always use each patch's
-//! *current* ε_c, so the picture stays crack-free while the queue catches up.
+//! **Reuse within ε.** A trimmed face's tessellation made at level ε_m may hold a finer level
+//! too: a plane bounded by lines is exact at every ε. When its measured errors (surface
+//! samples within [`REFINE_TARGET`]·ε, trim chords within ε/2: the standard a fresh
+//! tessellation is made to) hold the wanted level, the patch keeps its triangles, relabelled
+//! to that level's ε (fat borders as wide as the new ε), instead of tessellating again.
 //!
 //! **Levels and hysteresis** (Pajon, "LOD overview", on avoiding flicker between levels):
 //! tessellations are made only at discrete errors ε_k = unit · √2^k, the largest one ≤ ε_w,
@@ -33,7 +40,7 @@ use std::time::{Duration, Instant};
 
 use rayon::prelude::*;
 
-use crate::model::Scene;
+use crate::model::{PatchSurface, Scene};
 use crate::mt::CutState;
 use crate::tessellate::PatchMesh;
 use crate::view::View;
@@ -41,14 +48,46 @@ use crate::view::View;
 /// Ratio between consecutive tessellation levels.
 pub const LEVEL_RATIO: f64 = std::f64::consts::SQRT_2;
 
-/// Queue weight of a patch with current error `current` when the view wants `wanted` (both
-/// object units, > 0): quadratic when too coarse, linear when too fine (module doc).
-pub(crate) fn priority(current: f64, wanted: f64) -> f64 {
+use crate::tessellate::trimmed::REFINE_TARGET;
+
+/// Queue weight of a patch of bounding radius `radius` with current error `current` when the
+/// view wants `wanted` (object units, > 0) at `pixel_error` (module doc): when too coarse, its
+/// screen error (pixels) × its screen area (pixels², > 0); when too fine, −ε_c/ε_w (in
+/// (−1, 0): after every patch that is too coarse, the finest first).
+pub(crate) fn priority(current: f64, wanted: f64, radius: f64, pixel_error: f64) -> f64 {
     if current > wanted {
-        (current / wanted).powi(2)
+        let error_px = pixel_error * current / wanted;
+        let r_px = pixel_error * radius / wanted;
+        // (At least a pixel's area: a point-sized patch still shows its error.)
+        let area_px = (std::f64::consts::PI * r_px * r_px).max(1.0);
+        error_px * area_px
     } else {
-        wanted / current
+        -(current / wanted)
     }
+}
+
+/// Sorts queue entries `(weight, patch)` by weight, largest first (ties by patch index, so
+/// the order is the same on every run).
+pub(crate) fn order_queue(queue: &mut [(f64, usize)]) {
+    queue.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+}
+
+/// The finest level a trimmed face's tessellation `m` holds by its own measured errors: its
+/// surface samples within [`REFINE_TARGET`]·ε, its trim chords within ε/2 (what a fresh
+/// tessellation at ε is refined to), its border within ε; `None` when it cannot stand for
+/// another level (failed, stopped short, a mesh patch's cut).
+pub(crate) fn finest_held(levels: &Levels, m: &PatchMesh) -> Option<i32> {
+    if m.failure.is_some() || m.stopped.is_some() || m.arcs.is_some() {
+        return None;
+    }
+    let need = (m.error / REFINE_TARGET)
+        .max(2.0 * m.trim_error)
+        .max(m.border_error.unwrap_or(0.0));
+    if !need.is_finite() {
+        return None;
+    }
+    let k = levels.level_for(need);
+    Some(if levels.eps(k) < need { k + 1 } else { k })
 }
 
 /// What a patch at error `current` needs when the view wants `wanted`, with hysteresis
@@ -123,6 +162,9 @@ struct PatchLod {
     /// Current level and tessellation.
     level: i32,
     mesh: Arc<PatchMesh>,
+    /// The level the current tessellation was made at (coarser than `level` when it holds
+    /// that level too and was relabelled, module doc).
+    made: i32,
     /// Other tessellations kept, by level.
     cache: Vec<(i32, Arc<PatchMesh>)>,
     /// Error the current view wants.
@@ -142,6 +184,7 @@ impl PatchLod {
         let old = std::mem::replace(&mut self.mesh, mesh);
         self.cache.push((self.level, old));
         self.level = level;
+        self.made = level;
         while self.cache.len() + 1 > cache_levels.max(1) {
             let Some(k) =
                 (0..self.cache.len()).max_by_key(|&k| (self.cache[k].0 - level).unsigned_abs())
@@ -150,6 +193,49 @@ impl PatchLod {
             };
             self.cache.swap_remove(k);
         }
+    }
+}
+
+/// How a patch got a level without tessellating ([`PatchLod::switch_free`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Free {
+    /// A cached tessellation made at that level.
+    Cached,
+    /// The current tessellation, which holds that level by its measured errors.
+    Reused,
+}
+
+impl PatchLod {
+    /// Switches to `level` when that costs no tessellation: a cached tessellation made at
+    /// it, or (a trimmed face's, `trimmed`) the current one when its measured errors hold
+    /// `level` and `level` is no coarser than the one it was made at — the same triangles,
+    /// relabelled with `level`'s ε (fat borders as wide as it). `None`: it needs work.
+    fn switch_free(
+        &mut self,
+        level: i32,
+        levels: &Levels,
+        trimmed: bool,
+        cache_levels: usize,
+    ) -> Option<Free> {
+        if let Some(k) = self.cache.iter().position(|(l, _)| *l == level) {
+            let (l, mesh) = self.cache.swap_remove(k);
+            self.install(l, mesh, cache_levels);
+            return Some(Free::Cached);
+        }
+        let holds = trimmed
+            && level != self.level
+            && level <= self.made
+            && finest_held(levels, &self.mesh).is_some_and(|f| level >= f);
+        if !holds {
+            return None;
+        }
+        let eps = levels.eps(level).max(self.mesh.error);
+        self.mesh = Arc::new(PatchMesh {
+            eps_target: eps,
+            ..PatchMesh::clone(&self.mesh)
+        });
+        self.level = level;
+        Some(Free::Reused)
     }
 }
 
@@ -164,11 +250,26 @@ pub struct UpdateStats {
     pub retessellated: usize,
     /// Patches switched to a cached level (no tessellation).
     pub from_cache: usize,
+    /// Trimmed faces whose current tessellation holds the wanted level by its measured
+    /// errors: relabelled, not tessellated (module doc).
+    pub reused: usize,
     /// Of the re-tessellated patches, those given a moved copy of a tessellation their
     /// surface's other placements share (instanced parts: no tessellation of their own).
     pub copied: usize,
     /// Queued patches left for later frames.
     pub queue_left: usize,
+    /// Of the queued patches left, the trimmed faces.
+    pub trimmed_left: usize,
+    /// Tessellations made this frame (a surface shared by placements counted once; mesh
+    /// patches' cuts left out), the worker time they took summed over the workers, and
+    /// their triangles.
+    pub made: usize,
+    pub made_cpu: Duration,
+    pub made_triangles: usize,
+    /// Of `made`, those this loop had made before at the same level and dropped since
+    /// (redone work), and their worker time.
+    pub redone: usize,
+    pub redone_cpu: Duration,
     /// Wall time spent re-tessellating.
     pub tessellation: Duration,
     /// Triangles of the patches in the frustum.
@@ -254,6 +355,7 @@ impl FrameLoop {
             .zip(meshes.into_iter().zip(cuts))
             .map(|((patch, (_, level)), (mesh, cut))| PatchLod {
                 level,
+                made: level,
                 // (No deadline: every job is done.)
                 mesh: Arc::new(mesh.unwrap_or_default()),
                 cache: Vec::new(),
@@ -346,6 +448,7 @@ impl FrameLoop {
         let opts = self.options;
         let mut stats = UpdateStats::default();
         let mut queue: Vec<(f64, usize)> = Vec::new();
+        let mut hidden: Vec<usize> = Vec::new();
         // Culling through the hierarchy: only the patches inside the frustum are visited.
         if scene_key(scene) != self.bvh_for {
             self.bvh = bvh_of(scene);
@@ -370,28 +473,42 @@ impl FrameLoop {
             stats.in_frustum += 1;
             let current = self.levels.eps(p.level);
             // (At the finest level there is nothing better to do: not queued.)
-            if p.visible
-                && needs_update(current, p.wanted, opts.coarsen_factor)
+            if needs_update(current, p.wanted, opts.coarsen_factor)
                 && self.levels.level_for(p.wanted) != p.level
             {
-                queue.push((priority(current, p.wanted), i));
+                if p.visible {
+                    let radius = patch.bounds.radius;
+                    queue.push((priority(current, p.wanted, radius, opts.pixel_error), i));
+                } else if current > p.wanted {
+                    hidden.push(i);
+                }
             }
         }
         self.seen_next = std::mem::replace(&mut self.seen, seen);
         stats.queued = queue.len();
-        queue.sort_by(|a, b| b.0.total_cmp(&a.0));
-        // Cached levels first: free.
+        order_queue(&mut queue);
+        // Cached levels first, and tessellations that hold the wanted level: free.
         let levels = self.levels;
         let mut todo: Vec<(usize, i32)> = Vec::with_capacity(queue.len());
         for &(_, i) in &queue {
-            let p = &mut self.patches[i];
-            let level = levels.level_for(p.wanted);
-            if let Some(k) = p.cache.iter().position(|(l, _)| *l == level) {
-                let (l, mesh) = p.cache.swap_remove(k);
-                p.install(l, mesh, opts.cache_levels);
-                stats.from_cache += 1;
-            } else {
-                todo.push((i, level));
+            let level = levels.level_for(self.patches[i].wanted);
+            let trimmed = matches!(scene.patches[i].surface, PatchSurface::Trimmed(_));
+            match self.patches[i].switch_free(level, &levels, trimmed, opts.cache_levels) {
+                Some(Free::Cached) => stats.from_cache += 1,
+                Some(Free::Reused) => stats.reused += 1,
+                None => todo.push((i, level)),
+            }
+        }
+        // Hidden patches too coarse for the view (not queued: the paper spends no work on
+        // what the last frame did not show) still take what costs nothing, so a patch that
+        // shows up after a jump is not drawn coarser than it need be.
+        for &i in &hidden {
+            let level = levels.level_for(self.patches[i].wanted);
+            let trimmed = matches!(scene.patches[i].surface, PatchSurface::Trimmed(_));
+            match self.patches[i].switch_free(level, &levels, trimmed, opts.cache_levels) {
+                Some(Free::Cached) => stats.from_cache += 1,
+                Some(Free::Reused) => stats.reused += 1,
+                None => {}
             }
         }
         // Then tessellate from the top of the queue until the budget is spent: the workers
@@ -413,12 +530,26 @@ impl FrameLoop {
                     self.patches[i].install(level, Arc::new(mesh), opts.cache_levels);
                     stats.retessellated += 1;
                 }
-                None => stats.queue_left += 1,
+                None => {
+                    stats.queue_left += 1;
+                    if matches!(
+                        scene.patches[i].surface,
+                        crate::model::PatchSurface::Trimmed(_)
+                    ) {
+                        stats.trimmed_left += 1;
+                    }
+                }
             }
         }
+        let work = self.shared.last;
+        stats.made = work.made;
+        stats.made_cpu = Duration::from_secs_f64(work.made_secs);
+        stats.made_triangles = work.made_triangles;
+        stats.redone = work.redone;
+        stats.redone_cpu = Duration::from_secs_f64(work.redone_secs);
         self.shared.end_frame();
         stats.tessellation = start.elapsed();
-        if stats.retessellated + stats.from_cache > 0 || frustum_changed {
+        if stats.retessellated + stats.from_cache + stats.reused > 0 || frustum_changed {
             self.generation += 1;
         }
         stats.triangles = self.meshes().map(PatchMesh::triangle_count).sum();
@@ -566,115 +697,4 @@ impl PixelErrorController {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn too_coarse_outranks_too_fine() {
-        // Twice too coarse: 4; twice too fine: 2; on target: 1.
-        assert_eq!(priority(2.0, 1.0), 4.0);
-        assert_eq!(priority(0.5, 1.0), 2.0);
-        assert_eq!(priority(1.0, 1.0), 1.0);
-        // Ordering: any coarse patch beats an equally far-off fine one.
-        for r in [1.1, 1.5, 3.0, 10.0] {
-            assert!(priority(r, 1.0) > priority(1.0 / r, 1.0));
-        }
-        // Monotone in how far off a patch is.
-        assert!(priority(3.0, 1.0) > priority(2.0, 1.0));
-        assert!(priority(0.25, 1.0) > priority(0.5, 1.0));
-    }
-
-    #[test]
-    fn levels_give_the_coarsest_error_within_the_wanted_one() {
-        let l = Levels::for_diagonal(100.0);
-        for wanted in [1e-5, 3e-4, 0.01, 0.5, 1.0, 7.3, 100.0] {
-            let k = l.level_for(wanted);
-            assert!(l.eps(k) <= wanted * (1.0 + 1e-12), "{wanted}: {}", l.eps(k));
-            assert!(l.eps(k + 1) > wanted, "{wanted}");
-        }
-        assert_eq!(l.level_for(0.0), 0);
-        assert_eq!(l.level_for(f64::NAN), 0);
-    }
-
-    #[test]
-    fn hysteresis_keeps_a_level_while_the_view_wobbles() {
-        let l = Levels::for_diagonal(1.0);
-        let f = LodOptions::default().coarsen_factor;
-        // Tessellate for wanted 1e-3, then the wanted error wobbles within the band
-        // [ε_c, 2 ε_c] (a camera moving back and forth by up to 2×).
-        let current = l.eps(l.level_for(1e-3));
-        for r in [1.0, 1.5, 1.99, 1.2, 1.0, 1.8] {
-            assert!(!needs_update(current, r * current, f), "{r}");
-        }
-        // Moving closer by any amount past the level: too coarse at once.
-        assert!(needs_update(current, current * 0.99, f));
-        // Moving away past the band: coarsen.
-        assert!(needs_update(current, current * f * 1.01, f));
-        // Without hysteresis (factor 1) the same wobble would flip levels.
-        let flips = [1e-3, 1.5e-3, 1e-3, 1.5e-3]
-            .windows(2)
-            .filter(|w| {
-                let c = l.eps(l.level_for(w[0]));
-                needs_update(c, w[1], 1.0)
-            })
-            .count();
-        assert!(flips > 0);
-    }
-
-    #[test]
-    fn the_cache_keeps_the_levels_nearest_the_current_one() {
-        let mesh = |n: usize| {
-            Arc::new(PatchMesh {
-                triangles: vec![[0, 0, 0]; n],
-                ..PatchMesh::default()
-            })
-        };
-        let mut p = PatchLod {
-            level: 10,
-            mesh: mesh(10),
-            ..PatchLod::default()
-        };
-        for level in [11, 12, 13] {
-            p.install(level, mesh(level as usize), 3);
-        }
-        assert_eq!(p.level, 13);
-        assert_eq!(p.mesh.triangles.len(), 13);
-        let mut cached: Vec<i32> = p.cache.iter().map(|c| c.0).collect();
-        cached.sort();
-        assert_eq!(cached, vec![11, 12]);
-        // Every cached mesh is the one made for its level.
-        assert!(
-            p.cache
-                .iter()
-                .all(|(l, m)| m.triangles.len() == *l as usize)
-        );
-    }
-
-    #[test]
-    fn controller_converges_on_a_linear_cost() {
-        // Cost 2 ms + 1 µs per triangle; triangles = 40 000 / pixel error. Target 12 ms:
-        // 10 000 triangles, pixel error 4.
-        let mut c = PixelErrorController::new(Duration::from_millis(12), 0.5, 64.0);
-        let mut pe = c.pixel_error();
-        for _ in 0..40 {
-            let tris = (40_000.0 / pe) as usize;
-            let t = Duration::from_secs_f64(0.002 + 1e-6 * tris as f64);
-            pe = c.observe(tris, t);
-        }
-        assert!((pe - 4.0).abs() < 0.1, "{pe}");
-        // A frame time that does not depend on triangles (fill-bound) does not coarsen the
-        // picture, even above the target.
-        let mut c = PixelErrorController::new(Duration::from_millis(12), 0.5, 64.0);
-        let mut pe = c.pixel_error();
-        for _ in 0..20 {
-            pe = c.observe((40_000.0 / pe) as usize, Duration::from_millis(30));
-        }
-        assert_eq!(pe, 0.5);
-        // A cheap scene stays at the finest pixel error.
-        let mut c = PixelErrorController::new(Duration::from_millis(12), 0.5, 64.0);
-        for _ in 0..10 {
-            c.observe(1000, Duration::from_millis(3));
-        }
-        assert_eq!(c.pixel_error(), 0.5);
-    }
-}
+mod tests;

@@ -73,6 +73,33 @@ pub(super) struct SharedTessellations {
     pub(super) saved: u64,
     /// Tessellations made for shared surfaces, since the start.
     pub(super) made: u64,
+    /// Every (surface or patch, level) tessellated since the start: a second tessellation
+    /// of one of them is redone work (its result was made and dropped).
+    done: HashSet<(WorkKey, i32)>,
+    /// What the last [`SharedTessellations::tessellate`] made.
+    pub(super) last: WorkStats,
+}
+
+/// What was tessellated: a shared surface, or one patch's own surface.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+enum WorkKey {
+    Surface(SurfaceKey),
+    Patch(u32),
+}
+
+/// The work one call of [`SharedTessellations::tessellate`] did (mesh patches' cuts left
+/// out: they move, nothing is redone).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(super) struct WorkStats {
+    /// Tessellations made (a shared surface's counted once, however many placements).
+    pub made: usize,
+    /// Worker time they took, summed over the workers (seconds).
+    pub made_secs: f64,
+    /// Their triangles.
+    pub made_triangles: usize,
+    /// Of `made`, those made before in this loop at the same level: redone work.
+    pub redone: usize,
+    pub redone_secs: f64,
 }
 
 impl SharedTessellations {
@@ -155,6 +182,7 @@ impl SharedTessellations {
             }
         }
         let made = pull(work.len(), deadline, |t, w| {
+            let started = Instant::now();
             let mut mesh = PatchMesh::default();
             match &work[w] {
                 Work::Shared((key, level), i) => {
@@ -170,11 +198,35 @@ impl SharedTessellations {
                     t.patch_from(&scene.patches[i], levels.eps(level), &mut cut, &mut mesh);
                 }
             }
-            mesh
+            (mesh, started.elapsed().as_secs_f64())
         });
         let mut out: Vec<Option<PatchMesh>> = (0..jobs.len()).map(|_| None).collect();
         let mut made_shared = 0u64;
-        for (w, mesh) in work.into_iter().zip(made) {
+        self.last = WorkStats::default();
+        for (w, made) in work.into_iter().zip(made) {
+            let mesh = made.map(|(mesh, secs)| {
+                let done = match &w {
+                    Work::Shared((key, level), _) => Some((WorkKey::Surface(*key), *level)),
+                    Work::Own(k, _) => {
+                        let (i, level) = jobs[*k];
+                        let mesh_patch = matches!(
+                            scene.patches[i].surface,
+                            crate::model::PatchSurface::Mesh(_)
+                        );
+                        (!mesh_patch).then_some((WorkKey::Patch(i as u32), level))
+                    }
+                };
+                if let Some(done) = done {
+                    self.last.made += 1;
+                    self.last.made_secs += secs;
+                    self.last.made_triangles += mesh.triangle_count();
+                    if !self.done.insert(done) {
+                        self.last.redone += 1;
+                        self.last.redone_secs += secs;
+                    }
+                }
+                mesh
+            });
             match w {
                 Work::Shared(key, _) => {
                     if let Some(mesh) = mesh {

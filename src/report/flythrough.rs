@@ -5,12 +5,12 @@ use super::text::{draw_text, text_height, text_width};
 use crate::drive::flythrough::FrameRecord;
 
 /// Columns of the per-frame table.
-pub const CSV_HEADER: &str = "frame,frame_ms,tessellation_ms,retessellated,from_cache,queue_length,max_error_px,p99_error_px,triangles,pixel_error,crack_pixels,crack_pixels_off,upload_ms,draw_ms,cpu_ms,uploaded_bytes";
+pub const CSV_HEADER: &str = "frame,frame_ms,tessellation_ms,retessellated,from_cache,queue_length,max_error_px,p99_error_px,triangles,pixel_error,crack_pixels,crack_pixels_off,upload_ms,draw_ms,cpu_ms,uploaded_bytes,trimmed_waiting,made,made_cpu_ms,made_triangles,redone,redone_cpu_ms,reused";
 
 /// One frame's row, columns as [`CSV_HEADER`].
 pub fn csv_row(r: &FrameRecord) -> String {
     format!(
-        "{},{:.3},{:.3},{},{},{},{:.4},{:.4},{},{:.4},{},{},{:.3},{:.3},{:.3},{}",
+        "{},{:.3},{:.3},{},{},{},{:.4},{:.4},{},{:.4},{},{},{:.3},{:.3},{:.3},{},{},{},{:.3},{},{},{:.3},{}",
         r.frame,
         r.frame_ms,
         r.tessellation_ms,
@@ -26,13 +26,52 @@ pub fn csv_row(r: &FrameRecord) -> String {
         r.upload_ms,
         r.draw_ms,
         r.cpu_ms,
-        r.uploaded_bytes
+        r.uploaded_bytes,
+        r.trimmed_waiting,
+        r.made,
+        r.made_cpu_ms,
+        r.made_triangles,
+        r.redone,
+        r.redone_cpu_ms,
+        r.reused
     )
 }
 
 /// Header ([`CSV_HEADER`]) and one line per record, each ending in a newline.
 pub fn frames_csv(records: &[FrameRecord]) -> String {
     super::table(CSV_HEADER, records, csv_row)
+}
+
+/// The frames from the jump (`jump_frame`, at most `rows` of them) as a text table: trimmed
+/// faces still waiting, tessellations made, worker ms and triangles per tessellation, how
+/// many (and what share of the worker time) were redone work, and the largest and 99th
+/// percentile screen error (pixels).
+pub fn jump_table(records: &[FrameRecord], jump_frame: usize, rows: usize) -> String {
+    let mut t = String::from(
+        "frame  waiting  made  ms/face  tris/face  redone  redone_time  reused  max_px  p99_px\n",
+    );
+    for r in records.iter().filter(|r| r.frame >= jump_frame).take(rows) {
+        let per = |x: f64| if r.made > 0 { x / r.made as f64 } else { 0.0 };
+        let share = if r.made_cpu_ms > 0.0 {
+            100.0 * r.redone_cpu_ms / r.made_cpu_ms
+        } else {
+            0.0
+        };
+        t.push_str(&format!(
+            "+{:<5} {:>7} {:>5} {:>8.3} {:>10.0} {:>7} {:>11.0}% {:>7} {:>7.3} {:>7.3}\n",
+            r.frame - jump_frame,
+            r.trimmed_waiting,
+            r.made,
+            per(r.made_cpu_ms),
+            per(r.made_triangles as f64),
+            r.redone,
+            share,
+            r.reused,
+            r.max_error_px,
+            r.p99_error_px
+        ));
+    }
+    t
 }
 
 /// How a frame-rate target was met: mean frame time over all frames, and over the second half
@@ -365,7 +404,40 @@ mod tests {
             pixel_error,
             crack_pixels: Some(0),
             crack_pixels_off: None,
+            ..FrameRecord::default()
         }
+    }
+
+    #[test]
+    fn the_jump_table_shows_the_work_per_frame_from_the_jump() {
+        let mut r = [
+            record(0, 10.0, 0.5),
+            record(1, 10.0, 0.5),
+            record(2, 10.0, 0.5),
+            record(3, 10.0, 0.5),
+        ];
+        r[1].trimmed_waiting = 120;
+        r[1].made = 40;
+        r[1].made_cpu_ms = 80.0;
+        r[1].made_triangles = 4000;
+        r[1].redone = 10;
+        r[1].redone_cpu_ms = 20.0;
+        r[1].reused = 7;
+        r[1].max_error_px = 1.25;
+        let t = jump_table(&r, 1, 2);
+        let lines: Vec<&str> = t.lines().collect();
+        assert_eq!(lines.len(), 3, "{t}");
+        assert!(lines[0].starts_with("frame"), "{t}");
+        // Frame 1: 120 waiting, 40 made at 2 ms and 100 triangles each, a quarter redone.
+        let cols: Vec<&str> = lines[1].split_whitespace().collect();
+        assert_eq!(
+            cols,
+            [
+                "+0", "120", "40", "2.000", "100", "10", "25%", "7", "1.250", "0.300"
+            ],
+            "{t}"
+        );
+        assert!(lines[2].starts_with("+1"), "{t}");
     }
 
     #[test]

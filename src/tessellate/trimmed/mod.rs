@@ -60,7 +60,7 @@ const REFINE_ROUNDS: usize = 10;
 /// Triangles are refined down to this fraction of ε: 7 samples find a triangle's largest
 /// distance to within a few per cent only (bearing.iges face #2445: 0.998 ε by its samples,
 /// 1.008 ε by `check::fidelity`'s dense ones).
-const REFINE_TARGET: f64 = 0.95;
+pub const REFINE_TARGET: f64 = 0.95;
 /// Most vertices per face.
 const MAX_VERTICES: usize = 400_000;
 /// Vertices per ε² of a face's area that refinement may reach: a triangulation of edges

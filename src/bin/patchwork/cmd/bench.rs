@@ -21,7 +21,7 @@ use patchwork::drive::scale::{
 use patchwork::io::png;
 use patchwork::lod::LodOptions;
 use patchwork::render::Renderer;
-use patchwork::report::flythrough::{TargetSummary, frames_csv, plot};
+use patchwork::report::flythrough::{TargetSummary, frames_csv, jump_table, plot};
 use patchwork::report::scale as scale_report;
 use patchwork::strips::Join;
 use patchwork::view;
@@ -269,6 +269,12 @@ pub fn run(args: &BenchArgs) -> Result<bool, CliError> {
             "after the jump (frame {}) the visible patches never got within the pixel error",
             summary.jump_frame
         ),
+    }
+    data!(
+        "from the jump, per frame (waiting: trimmed faces queued and left; ms/face: worker time per tessellation made; redone: made before at that level and dropped; reused: trimmed faces whose tessellation held the wanted level)"
+    );
+    for line in jump_table(&records, summary.jump_frame, 16).lines() {
+        data!("  {line}");
     }
     if let Some((t, s)) = target {
         data!(
