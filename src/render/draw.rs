@@ -165,9 +165,10 @@ impl Renderer {
                     Shading::Ids => 2,
                 },
                 fat_border::template(opts.fat_borders).len() as u32,
-                0,
+                opts.sections.len() as u32,
                 0,
             ],
+            sections: opts.sections.gpu(),
         }
     }
 

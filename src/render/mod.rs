@@ -21,12 +21,14 @@ pub mod gpu;
 mod pipelines;
 mod readback;
 pub mod resident;
+pub mod section;
 pub mod shaders;
 mod upload;
 
 pub use fat_border::{BorderGeometry, BorderPoint, FatBorders};
 pub use gpu::{Gpu, RenderError};
 pub use resident::{ResidentGeometry, UploadStats};
+pub use section::{SectionError, SectionPlane, Sections};
 pub use upload::GpuMeshes;
 
 use pipelines::Targets;
@@ -165,6 +167,8 @@ pub struct RenderOptions {
     /// Also render the patch ID buffer (one sample per pixel; fat borders count for their
     /// patch): which patches are visible.
     pub ids: bool,
+    /// Section planes: the model clipped and its cut capped ([`section`]).
+    pub sections: Sections,
 }
 
 impl Default for RenderOptions {
@@ -177,6 +181,7 @@ impl Default for RenderOptions {
             msaa: 1,
             depth: false,
             ids: false,
+            sections: Sections::NONE,
         }
     }
 }

@@ -13,6 +13,8 @@ pub(crate) struct Globals {
     pub(crate) light: [f32; 4],
     pub(crate) color: [f32; 4],
     pub(crate) mode: [u32; 4],
+    /// Section planes ([`super::section::Sections::gpu`]); `mode[2]` of them in use.
+    pub(crate) sections: [[f32; 4]; super::section::Sections::MAX],
 }
 
 #[derive(Debug)]
