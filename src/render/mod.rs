@@ -279,6 +279,8 @@ pub struct Renderer {
     /// 2-vertex variants over [`PATTERN_POINTS`] points.
     patterns: [wgpu::Buffer; 3],
     pipelines: HashMap<Target, Pipelines>,
+    /// The same with section planes (fragment shaders `fs_*_cut`), built on first use.
+    cut_pipelines: HashMap<Target, Pipelines>,
     /// Render targets, kept between frames of the same size.
     targets: HashMap<Target, Targets>,
     /// Static buffers of mesh patches' hierarchies, built on first use.
@@ -393,6 +395,7 @@ impl Renderer {
             placed_border_layout,
             patterns,
             pipelines: HashMap::new(),
+            cut_pipelines: HashMap::new(),
             targets: HashMap::new(),
             statics: Mutex::new(HashMap::new()),
             strips: crate::strips::StripStore::new(),
