@@ -450,3 +450,31 @@ fn ortho_flag_and_the_5_key() {
     let help = String::from_utf8_lossy(&help.stdout);
     assert!(help.contains("5 orthographic / perspective"), "{help}");
 }
+
+/// Share of pixels that differ between two images of one size.
+fn differing(a: &image::RgbaImage, b: &image::RgbaImage) -> f64 {
+    assert_eq!(a.dimensions(), b.dimensions());
+    let n = a.pixels().zip(b.pixels()).filter(|(p, q)| p != q).count();
+    n as f64 / (a.width() * a.height()) as f64
+}
+
+#[test]
+fn section_flag_and_the_c_key() {
+    let display = Display::open();
+    let plain = view(&display, "section-plain", 6, "");
+    let cut = ["--section", "0,0,0,0,-1,0"];
+    let sectioned = view_with(&display, "section-cut", 6, "", &cut);
+    // `c` on the first frame turns the planes off: the plain teapot again.
+    let toggled = view_with(&display, "section-off", 6, "c", &cut);
+    let (d_cut, d_off) = (differing(&plain, &sectioned), differing(&plain, &toggled));
+    assert!(
+        d_cut > 0.05,
+        "--section changed {:.1} % of the pixels",
+        d_cut * 100.0
+    );
+    assert!(
+        d_off < 0.002,
+        "with c, {:.2} % of the pixels differ",
+        d_off * 100.0
+    );
+}

@@ -165,9 +165,10 @@ impl Renderer {
                     Shading::Ids => 2,
                 },
                 fat_border::template(opts.fat_borders).len() as u32,
-                0,
+                opts.sections.len() as u32,
                 0,
             ],
+            sections: opts.sections.gpu(),
         }
     }
 
@@ -184,14 +185,19 @@ impl Renderer {
         h: u32,
         clear: wgpu::Color,
     ) -> Result<Vec<T>, RenderError> {
-        self.pipelines(target);
+        let cut = !opts.sections.is_empty();
+        self.pipelines_for(target, cut);
         if self.targets.get(&target).is_none_or(|t| t.size != (w, h)) {
             let t = Targets::new(&self.gpu, &self.bind_layout, target, w, h);
             self.targets.insert(target, t);
         }
         let device = &self.gpu.device;
         // Built just above.
-        let pipes = &self.pipelines[&target];
+        let pipes = if cut {
+            &self.cut_pipelines[&target]
+        } else {
+            &self.pipelines[&target]
+        };
         let targets = &self.targets[&target];
         self.gpu
             .queue

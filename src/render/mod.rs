@@ -21,12 +21,14 @@ pub mod gpu;
 mod pipelines;
 mod readback;
 pub mod resident;
+pub mod section;
 pub mod shaders;
 mod upload;
 
 pub use fat_border::{BorderGeometry, BorderPoint, FatBorders};
 pub use gpu::{Gpu, RenderError};
 pub use resident::{ResidentGeometry, UploadStats};
+pub use section::{SectionError, SectionPlane, Sections};
 pub use upload::GpuMeshes;
 
 use pipelines::Targets;
@@ -165,6 +167,8 @@ pub struct RenderOptions {
     /// Also render the patch ID buffer (one sample per pixel; fat borders count for their
     /// patch): which patches are visible.
     pub ids: bool,
+    /// Section planes: the model clipped and its cut capped ([`section`]).
+    pub sections: Sections,
 }
 
 impl Default for RenderOptions {
@@ -177,6 +181,7 @@ impl Default for RenderOptions {
             msaa: 1,
             depth: false,
             ids: false,
+            sections: Sections::NONE,
         }
     }
 }
@@ -274,6 +279,8 @@ pub struct Renderer {
     /// 2-vertex variants over [`PATTERN_POINTS`] points.
     patterns: [wgpu::Buffer; 3],
     pipelines: HashMap<Target, Pipelines>,
+    /// The same with section planes (fragment shaders `fs_*_cut`), built on first use.
+    cut_pipelines: HashMap<Target, Pipelines>,
     /// Render targets, kept between frames of the same size.
     targets: HashMap<Target, Targets>,
     /// Static buffers of mesh patches' hierarchies, built on first use.
@@ -388,6 +395,7 @@ impl Renderer {
             placed_border_layout,
             patterns,
             pipelines: HashMap::new(),
+            cut_pipelines: HashMap::new(),
             targets: HashMap::new(),
             statics: Mutex::new(HashMap::new()),
             strips: crate::strips::StripStore::new(),

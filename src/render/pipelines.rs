@@ -13,6 +13,8 @@ pub(crate) struct Globals {
     pub(crate) light: [f32; 4],
     pub(crate) color: [f32; 4],
     pub(crate) mode: [u32; 4],
+    /// Section planes ([`super::section::Sections::gpu`]); `mode[2]` of them in use.
+    pub(crate) sections: [[f32; 4]; super::section::Sections::MAX],
 }
 
 #[derive(Debug)]
@@ -149,18 +151,37 @@ impl Renderer {
 
     pub(crate) fn pipelines(&mut self, target: Target) -> &Pipelines {
         if !self.pipelines.contains_key(&target) {
-            let p = self.build_pipelines(target);
+            let p = self.build_pipelines(target, false);
             self.pipelines.insert(target, p);
         }
         &self.pipelines[&target]
     }
 
-    pub(super) fn build_pipelines(&self, target: Target) -> Pipelines {
+    /// The pipelines of `target` with section planes (`cut`: fragments clipped and capped,
+    /// [`super::section`]) or without, built on first use.
+    pub(super) fn pipelines_for(&mut self, target: Target, cut: bool) -> &Pipelines {
+        if !cut {
+            return self.pipelines(target);
+        }
+        if !self.cut_pipelines.contains_key(&target) {
+            let p = self.build_pipelines(target, true);
+            self.cut_pipelines.insert(target, p);
+        }
+        &self.cut_pipelines[&target]
+    }
+
+    pub(super) fn build_pipelines(&self, target: Target, cut: bool) -> Pipelines {
         let (format, samples, fs) = match target {
             Target::Color { samples } => (COLOR_FORMAT, samples, "fs_color"),
             Target::Depth => (LINEAR_DEPTH_FORMAT, 1, "fs_depth"),
             Target::Ids => (LINEAR_DEPTH_FORMAT, 1, "fs_id"),
             Target::External { color, samples, .. } => (color, samples, "fs_color"),
+        };
+        let fs = match (fs, cut) {
+            (_, false) => fs,
+            ("fs_depth", true) => "fs_depth_cut",
+            ("fs_id", true) => "fs_id_cut",
+            _ => "fs_color_cut",
         };
         let (depth_format, depth_compare) = match target {
             Target::External { depth, compare, .. } => (depth, compare),

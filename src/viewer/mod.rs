@@ -83,6 +83,7 @@ Keys:  arrows orbit, PageUp / PageDown zoom, f fit to view, 5 orthographic / per
        b fat borders off / 6 / 4 / 2, w wireframe, i patch-ID colours,
        h screen-error heat map (blue finer than asked, green on target, red coarser),
        + / - pixel error x2 / /2, p screenshot, space play / pause (--implode),
+       c section planes on / off (--section),
        ? these lines, q or Esc quit.
 Title: frames per second, triangles, re-tessellation queue, largest screen error.";
 
@@ -110,6 +111,8 @@ pub struct ViewerOptions {
     pub implode: Option<ViewerAnimation>,
     /// Triangle lists or strips.
     pub primitives: crate::render::Primitives,
+    /// Section planes (`c` turns them off and on).
+    pub sections: crate::render::Sections,
     /// Where the viewer's messages go (the adapter chosen, screenshots written, a screenshot
     /// that failed): the library prints nothing; the binary passes a function that does.
     pub notify: fn(&str),
@@ -235,6 +238,7 @@ pub fn run_upgrading(
         shading: Shading::Lit,
         ortho,
         wireframe: false,
+        sections_on: true,
         heat: false,
         drag: None,
         cursor: PhysicalPosition::new(0.0, 0.0),
@@ -281,6 +285,8 @@ struct App {
     /// Orthographic projection (`5` toggles).
     ortho: bool,
     wireframe: bool,
+    /// The section planes of the options are drawn (`c` toggles).
+    sections_on: bool,
     heat: bool,
     drag: Option<MouseButton>,
     cursor: PhysicalPosition<f64>,
@@ -402,6 +408,11 @@ impl App {
                 fat_borders: self.fat_borders,
                 msaa: 1,
                 depth: self.wireframe,
+                sections: if self.sections_on {
+                    self.options.sections
+                } else {
+                    crate::render::Sections::NONE
+                },
                 ..RenderOptions::default()
             },
             offsets: offsets.as_deref(),
@@ -521,6 +532,7 @@ impl App {
                 }
             }
             Key::Character("w") => self.wireframe = !self.wireframe,
+            Key::Character("c") => self.sections_on = !self.sections_on,
             Key::Character("5") => self.ortho = !self.ortho,
             Key::Named(NamedKey::Space) => {
                 if let Some(p) = self.playing.as_mut() {

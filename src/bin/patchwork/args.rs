@@ -14,7 +14,7 @@ use glam::DVec3;
 use patchwork::lod::LodOptions;
 use patchwork::model::Scene;
 use patchwork::prep::{Hierarchies, LoadOptions};
-use patchwork::render::{FatBorders, Primitives, RenderOptions, Shading};
+use patchwork::render::{FatBorders, Primitives, RenderOptions, SectionPlane, Sections, Shading};
 use patchwork::view::{self, Framing, NamedView, View};
 
 use crate::error::CliError;
@@ -431,5 +431,30 @@ impl PartArgs {
             .ok_or_else(|| CliError::NothingSelected {
                 path: file.to_owned(),
             })
+    }
+}
+
+/// Section planes (`render`, `implode`, `view`).
+#[derive(Args, Debug, Clone, Default)]
+pub struct SectionArgs {
+    /// Cut the model with the plane through X,Y,Z with normal NX,NY,NZ: the side the normal
+    /// points into is removed and the cut is capped in the part's colour (repeat for up to 3
+    /// planes; the kept region is on the back side of all of them).
+    #[arg(
+        long = "section",
+        value_name = "X,Y,Z,NX,NY,NZ",
+        allow_hyphen_values = true
+    )]
+    pub sections: Vec<String>,
+}
+
+impl SectionArgs {
+    /// The planes, each parsed and checked (six finite numbers, a normal that is not zero),
+    /// at most [`Sections::MAX`].
+    pub fn validate(&self) -> Result<Sections, CliError> {
+        let planes = (self.sections.iter())
+            .map(|s| s.parse::<SectionPlane>())
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Sections::new(&planes)?)
     }
 }

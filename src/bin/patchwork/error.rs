@@ -35,6 +35,9 @@ pub enum CliError {
     Export(#[from] ExportError),
     #[error(transparent)]
     Depth(#[from] DepthError),
+    /// `--section` refused (not six finite numbers, a zero normal, more than 3 planes).
+    #[error("--section: {0}")]
+    Section(#[from] patchwork::render::SectionError),
     #[error(transparent)]
     #[cfg(feature = "viewer")]
     Viewer(#[from] ViewerError),

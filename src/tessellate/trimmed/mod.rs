@@ -353,7 +353,9 @@ impl TrimmedTessellator {
             if *r == u32::MAX {
                 *r = out.positions.len() as u32;
                 out.positions.push(self.pos[i as usize].as_vec3());
-                out.normals.push(normal_at(s, self.uvs[i as usize], lo, hi));
+                // Outward (the face's sense): section caps tell inside from outside by it.
+                let n = normal_at(s, self.uvs[i as usize], lo, hi);
+                out.normals.push(if face.domain_left { n } else { -n });
             }
             *r
         };

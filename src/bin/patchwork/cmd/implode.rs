@@ -72,6 +72,8 @@ pub struct ImplodeArgs {
     camera: CameraArgs,
     #[command(flatten)]
     draw: DrawArgs,
+    #[command(flatten)]
+    section: crate::args::SectionArgs,
 }
 
 /// The output folder, refused when it is named like one of the files written into it.
@@ -131,6 +133,7 @@ pub fn run(args: &ImplodeArgs) -> Result<bool, CliError> {
     at_least("--fps", args.fps as usize, 1)?;
     let fps = args.fps;
     let budget = args.budget.validate()?;
+    let sections = args.section.validate()?;
     output_folder(&args.output)?;
     let scene = args
         .parts
@@ -160,7 +163,10 @@ pub fn run(args: &ImplodeArgs) -> Result<bool, CliError> {
         by: args.by,
         distance,
         lod: lod_options(camera.pixel_error, budget),
-        render: args.draw.options(),
+        render: patchwork::render::RenderOptions {
+            sections,
+            ..args.draw.options()
+        },
         check: args.check,
         save_failures: args.save_failures.clone(),
     };

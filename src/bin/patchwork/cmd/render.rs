@@ -34,6 +34,8 @@ pub struct RenderArgs {
     camera: CameraArgs,
     #[command(flatten)]
     draw: DrawArgs,
+    #[command(flatten)]
+    section: crate::args::SectionArgs,
     /// Also write linear view-space depth as a 16-bit PNG (0 = near plane, 65535 = far plane).
     #[arg(long)]
     depth_out: Option<PathBuf>,
@@ -56,6 +58,7 @@ pub fn run(args: &RenderArgs) -> Result<bool, CliError> {
             range: "from 0 to 1 (mean FLIP error)",
         });
     }
+    let sections = args.section.validate()?;
     // Read the reference first: a missing or unreadable one fails before any work.
     let reference = args.reference.as_deref().map(read_reference).transpose()?;
     // A mesh is drawn from its cached hierarchies, or else at full resolution (error 0):
@@ -90,7 +93,10 @@ pub fn run(args: &RenderArgs) -> Result<bool, CliError> {
     };
     note!("adapter: {}", renderer.gpu().describe());
     let gpu = renderer.upload(&meshes);
-    let opts = args.draw.options();
+    let opts = RenderOptions {
+        sections,
+        ..args.draw.options()
+    };
     let t1 = Instant::now();
     let frame = renderer.render(&gpu, &view, &opts)?;
     let t_render = t1.elapsed();

@@ -52,6 +52,8 @@ pub struct ViewArgs {
     implode_frames: usize,
     #[command(flatten)]
     primitives: PrimitivesArg,
+    #[command(flatten)]
+    section: crate::args::SectionArgs,
 }
 
 pub fn run(args: &ViewArgs) -> Result<(), CliError> {
@@ -62,6 +64,7 @@ pub fn run(args: &ViewArgs) -> Result<(), CliError> {
         .map(|n| at_least("--frames", n, 1))
         .transpose()?;
     let distance = distance(args.distance)?;
+    let sections = args.section.validate()?;
     if let Some(k) = args.keys.iter().find(|k| script_key(k).is_none()) {
         return Err(CliError::UnknownKey { key: k.clone() });
     }
@@ -128,6 +131,7 @@ pub fn run(args: &ViewArgs) -> Result<(), CliError> {
                 frames: args.implode_frames.max(2),
             }),
             primitives: args.primitives.primitives,
+            sections,
             notify: |m| note!("{m}"),
         },
         upgrade,
