@@ -208,8 +208,7 @@ enum Free {
 impl PatchLod {
     /// Switches to `level` when that costs no tessellation: a cached tessellation made at
     /// it, or (a trimmed face's, `trimmed`) the current one when its measured errors hold
-    /// `level` and `level` is no coarser than the one it was made at (and it is not an
-    /// instance of a shared tessellation) — the same triangles,
+    /// `level` and `level` is no coarser than the one it was made at — the same triangles,
     /// relabelled with `level`'s ε (fat borders as wide as it). `None`: it needs work.
     fn switch_free(
         &mut self,
@@ -223,21 +222,23 @@ impl PatchLod {
             self.install(l, mesh, cache_levels);
             return Some(Free::Cached);
         }
-        // (Not a placement of a shared tessellation: the renderer draws the shared mesh, whose
-        // ε the relabelled copy would not change, and every placement would need its own.)
         let holds = trimmed
-            && self.mesh.instance.is_none()
             && level != self.level
             && level <= self.made
             && finest_held(levels, &self.mesh).is_some_and(|f| level >= f);
         if !holds {
             return None;
         }
-        let eps = levels.eps(level).max(self.mesh.error);
-        self.mesh = Arc::new(PatchMesh {
-            eps_target: eps,
-            ..PatchMesh::clone(&self.mesh)
-        });
+        // A placement of a shared tessellation keeps its mesh, and its fat borders the ε it
+        // was made at (wider, so they still cover): the renderer draws the shared mesh with
+        // the shared mesh's ε, and a relabelled copy per placement would part them.
+        if self.mesh.instance.is_none() {
+            let eps = levels.eps(level).max(self.mesh.error);
+            self.mesh = Arc::new(PatchMesh {
+                eps_target: eps,
+                ..PatchMesh::clone(&self.mesh)
+            });
+        }
         self.level = level;
         Some(Free::Reused)
     }
