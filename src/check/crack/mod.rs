@@ -537,6 +537,7 @@ pub fn check_render_options(fat_borders: FatBorders) -> RenderOptions {
         msaa: 1,
         depth: true,
         ids: false,
+        edges: crate::render::Edges::Off,
     }
 }
 

@@ -7,9 +7,11 @@ use clap::Args;
 use patchwork::anim::GroupBy;
 use patchwork::viewer::{ViewerAnimation, ViewerOptions, script_key};
 
-use crate::args::{BudgetArgs, CameraArgs, PrimitivesArg, at_least, distance, lod_options};
+use crate::args::{
+    BudgetArgs, CameraArgs, EdgesArg, PrimitivesArg, at_least, distance, lod_options,
+};
 use crate::error::CliError;
-use crate::out::note;
+use crate::out::{data, note};
 
 #[derive(Args, Debug)]
 #[command(after_help = patchwork::viewer::CONTROLS)]
@@ -52,6 +54,9 @@ pub struct ViewArgs {
     implode_frames: usize,
     #[command(flatten)]
     primitives: PrimitivesArg,
+    /// The edges drawn at the start (`e` cycles off / feature / all).
+    #[command(flatten)]
+    edges: EdgesArg,
 }
 
 pub fn run(args: &ViewArgs) -> Result<(), CliError> {
@@ -128,7 +133,9 @@ pub fn run(args: &ViewArgs) -> Result<(), CliError> {
                 frames: args.implode_frames.max(2),
             }),
             primitives: args.primitives.primitives,
+            edges: args.edges.edges,
             notify: |m| note!("{m}"),
+            picked: |m| data!("{m}"),
         },
         upgrade,
     )?;
