@@ -24,6 +24,12 @@
 //! an edge used once in the wedge-split mesh is a crease or a boundary, an edge two triangles
 //! share a patch cut (`model::mesh::extract`).
 //!
+//! Counted against Open CASCADE's own continuity of the same files (`BRep_Tool::Continuity`
+//! after its STEP reader, which encodes regularity at 0.01°; README, "Edges of the model"):
+//! the same numbers of sharp and smooth edges where both see the same edges; with this angle
+//! at 0.01° also on `corpus/Block.stp.gz` (1 305 sharp, 275 smooth), within 5 of 355 on the
+//! crankshaft. 1° leaves out kinks shading cannot show either.
+//!
 //! What it does not do: faces that meet along an edge without sharing it (IGES, two solids
 //! touching) are not paired; an edge whose faces agree at the three samples but not between
 //! them counts as smooth; silhouettes are not edges.
