@@ -12,7 +12,8 @@ struct Globals {
     // rgb: colour for `flat` shading, and for `lit` shading of patches without their own.
     color: vec4<f32>,
     // x: shading mode (0 lit, 1 flat, 2 ids); y: codes of the fat-border template drawn (18,
-    // 12 or 6; see `fat_border_vertex`); z: section planes in use (0–3).
+    // 12 or 6; see `fat_border_vertex`); z: section planes in use (0–3); w: the edge bits a
+    // border segment needs to be drawn as an edge (`vs_edge`; 0 none, 1 all, 2 feature).
     mode: vec4<u32>,
     // Section planes (`render::section`): (N, −N·P); the side N points into is removed.
     sections: array<vec4<f32>, 3>,
@@ -312,4 +313,81 @@ fn fs_depth_cut(in: VsOut) -> @location(0) u32 {
     }
     let cap = section_cap_of(in, drawn);
     return depth_bits(select(in.actual, cap.xyz, cap.w >= 0.0));
+}
+
+// ---- Edges of the model (issue 32): ~1 px lines along the border polylines ----
+//
+// The border points the fat borders are expanded from are the edges' polylines too, at the
+// frame's level of detail. The segment from point s to point s + 1 is drawn when the edge
+// bits of point s (the low two bits of its colour's alpha byte: 1 any edge, 2 a feature edge;
+// `render::fat_border::edge_bits`) meet globals.mode.w, and s is no ring's closing point
+// (whose next point opens the next ring). Vertex i of a line-list draw is end i mod 2 of
+// segment i div 2; a segment not drawn is moved wholly outside the clip volume. CPU twin:
+// `render::edges::segments`.
+//
+// Lines lie on their patch's own triangles, and a neighbour's tessellation may be up to its
+// ε in front of them; each end is pulled EDGE_PULL × ε towards the viewer, along its ray (so
+// it projects where it was), and is depth-tested without writing depth. Fat borders, pushed
+// back by ε, stay behind the lines; a surface more than that in front of an edge hides it.
+
+const EDGE_PULL: f32 = 2.0;
+const EDGE_COLOR: vec3<f32> = vec3<f32>(0.06, 0.06, 0.07);
+
+struct EdgeOut {
+    @builtin(position) clip: vec4<f32>,
+    // The unpulled world point, for the section planes (`fs_edge` discards what they remove).
+    @location(0) world: vec3<f32>,
+};
+
+fn edge_drawn(s: u32) -> bool {
+    let bits = fb_points[s * FB_POINT_WORDS + 9u] >> 24u;
+    return (fb_info(s) & FB_INFO_CLOSING) == 0u && (bits & globals.mode.w) != 0u;
+}
+
+// World point p of a patch with error eps, pulled towards the viewer, in clip space.
+fn edge_clip(p: vec3<f32>, eps: f32) -> vec4<f32> {
+    let h = viewer();
+    let d = fb_normalize_or(h.xyz - p * h.w, vec3<f32>(0.0, 0.0, 1.0));
+    return globals.view_proj * vec4<f32>(p + EDGE_PULL * eps * d, 1.0);
+}
+
+// Outside the clip volume (right of it): a segment whose two ends are here draws nothing.
+const EDGE_NOWHERE: vec4<f32> = vec4<f32>(2.0, 2.0, 2.0, 1.0);
+
+@vertex
+fn vs_edge(@builtin(vertex_index) i: u32) -> EdgeOut {
+    let s = i / 2u;
+    var out: EdgeOut;
+    out.clip = EDGE_NOWHERE;
+    out.world = vec3<f32>(0.0, 0.0, 0.0);
+    if (edge_drawn(s)) {
+        out.world = fb_cur(s + (i & 1u));
+        out.clip = edge_clip(out.world, fb_word_f(s, 3u));
+    }
+    return out;
+}
+
+// As `vs_edge` for the points of a shared mesh drawn with a placement (instanced parts).
+@vertex
+fn vs_edge_placed(@builtin(vertex_index) i: u32, @location(4) record: u32) -> EdgeOut {
+    let s = i / 2u;
+    var out: EdgeOut;
+    out.clip = EDGE_NOWHERE;
+    out.world = vec3<f32>(0.0, 0.0, 0.0);
+    if (edge_drawn(s)) {
+        let r = records[record];
+        let m = FbPlacement(r.x, r.y, r.z);
+        let eps = fb_word_f(s, 3u) + bitcast<f32>(r.extra.z);
+        out.world = fb_place(m, fb_cur(s + (i & 1u)));
+        out.clip = edge_clip(out.world, eps);
+    }
+    return out;
+}
+
+@fragment
+fn fs_edge(in: EdgeOut) -> @location(0) vec4<f32> {
+    if (section_removes(in.world)) {
+        discard;
+    }
+    return vec4<f32>(EDGE_COLOR, 1.0);
 }

@@ -390,6 +390,7 @@ impl Renderer {
             pipes,
             &self.bind,
             self.options.fat_borders,
+            None,
         );
     }
 }

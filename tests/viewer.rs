@@ -153,6 +153,39 @@ fn keys_switch_the_heat_map_and_patch_ids() {
     assert!(colours.len() >= 20, "{} colours", colours.len());
 }
 
+/// `e` cycles the edges off → feature → all → off; `--edges` sets the first mode.
+#[test]
+fn the_e_key_cycles_the_edges() {
+    let display = Display::open();
+    // Edge pixels are near black; the lit teapot's darkest shade is above 40.
+    let dark = |img: &image::RgbaImage| {
+        img.pixels()
+            .filter(|p| p.0[..3].iter().all(|&c| c < 30))
+            .count()
+    };
+    let off = dark(&view(&display, "edges-off", 3, ""));
+    let feature = dark(&view(&display, "edges-feature", 3, "e"));
+    let all = dark(&view(&display, "edges-all", 3, "e,e"));
+    let again = dark(&view(&display, "edges-off-again", 4, "e,e,e"));
+    let flag = dark(&view_with(
+        &display,
+        "edges-flag",
+        3,
+        "",
+        &["--edges", "all"],
+    ));
+    assert!(off < 10, "{off} dark pixels without edges");
+    // Feature edges: the rims of the lid and the body, the spout's end (~100 pixels at
+    // 400 x 300); all edges: every patch border too (~1 000).
+    assert!(feature > 50, "{feature} edge pixels with feature edges");
+    assert!(all > 3 * feature, "all {all}, feature {feature}");
+    assert!(again < 10, "{again} dark pixels after cycling back");
+    assert!(
+        flag.abs_diff(all) * 10 <= all,
+        "--edges all {flag}, e,e {all}"
+    );
+}
+
 /// Bounding box (width, height) of the non-background pixels.
 fn extent(img: &image::RgbaImage) -> (u32, u32) {
     let (mut x0, mut y0, mut x1, mut y1) = (u32::MAX, u32::MAX, 0, 0);

@@ -9,6 +9,7 @@ use glam::DVec3;
 use thiserror::Error;
 
 use super::Sphere;
+use super::edges::EdgeKind;
 
 /// Highest degree accepted in u or v.
 pub const MAX_DEGREE: usize = 15;
@@ -60,6 +61,9 @@ pub struct BezierPatch {
     /// Length of `S_u × S_v` below which a point counts as degenerate (scale² · 1e-9), computed
     /// once: `normal` runs per tessellated vertex.
     tiny_normal: f64,
+    /// What each side of the patch is (`model::edges::bezier_sides`; u = 0, v = 1, u = 1,
+    /// v = 0): a sharp edge until the scene says otherwise.
+    sides: [EdgeKind; 4],
 }
 
 /// Position and derivatives of a surface at one parameter point.
@@ -141,7 +145,19 @@ impl BezierPatch {
             dv,
             ctrl,
             tiny_normal,
+            sides: [EdgeKind::Sharp; 4],
         })
+    }
+
+    /// What each side is as an edge of the model (u = 0, v = 1, u = 1, v = 0; see
+    /// [`crate::model::edges`]).
+    pub fn sides(&self) -> [EdgeKind; 4] {
+        self.sides
+    }
+
+    /// This patch with its sides' kinds set (by the scene, which knows its neighbours).
+    pub fn with_sides(self, sides: [EdgeKind; 4]) -> Self {
+        BezierPatch { sides, ..self }
     }
 
     pub fn degree(&self) -> (usize, usize) {

@@ -116,6 +116,8 @@ fn mesh_patch_bytes(m: &MeshPatch) -> usize {
         + vec_bytes(&m.triangles)
         + vec_bytes(&m.borders)
         + m.borders.iter().map(vec_bytes).sum::<usize>()
+        + vec_bytes(&m.border_kinds)
+        + m.border_kinds.iter().map(vec_bytes).sum::<usize>()
         + vec_bytes(&m.source_triangles)
         + vec_bytes(&m.source_vertices)
         + vec_bytes(&h.triangles)

@@ -14,6 +14,7 @@ use std::collections::HashMap;
 use glam::Vec3;
 
 use super::creases;
+use super::edges::EdgeKind;
 use crate::util::IntMap;
 
 /// An indexed triangle mesh in world coordinates.
@@ -157,6 +158,10 @@ pub struct MeshPatch {
     pub triangles: Vec<[u32; 3]>,
     /// Closed border loops as indices into `positions` (first vertex not repeated).
     pub borders: Vec<Vec<u32>>,
+    /// Per border loop, per vertex k: the edge from vertex k to the next is a crease or a
+    /// boundary of the mesh (one triangle of the whole mesh uses it: sharp) or where the mesh
+    /// was cut into patches (two do: no edge); see `model::edges`.
+    pub border_kinds: Vec<Vec<EdgeKind>>,
     /// Indices of the patch's triangles in the partitioned mesh.
     pub source_triangles: Vec<u32>,
     /// Index in the partitioned mesh of every patch vertex.
@@ -203,7 +208,25 @@ pub fn vertex_normals(mesh: &TriMesh) -> Vec<Vec3> {
 
 /// The patch made of `triangles` of `mesh`: local vertices with their `normals` (one per mesh
 /// vertex, e.g. [`vertex_normals`]) and border loops.
-pub fn extract(mesh: &TriMesh, normals: &[Vec3], triangles: &[u32]) -> MeshPatch {
+/// How many triangles of `triangles` use each edge ([`edge`] keys): what
+/// [`MeshPatch::border_kinds`] are made from.
+pub(crate) fn edge_uses(triangles: &[[u32; 3]]) -> IntMap<(u32, u32), u32> {
+    let mut uses: IntMap<(u32, u32), u32> = IntMap::default();
+    for t in triangles {
+        for k in 0..3 {
+            *uses.entry(edge(t[k], t[(k + 1) % 3])).or_default() += 1;
+        }
+    }
+    uses
+}
+
+/// The patch of `mesh` made of `triangles`; `uses` are the whole mesh's [`edge_uses`].
+pub(crate) fn extract(
+    mesh: &TriMesh,
+    normals: &[Vec3],
+    triangles: &[u32],
+    uses: &IntMap<(u32, u32), u32>,
+) -> MeshPatch {
     let mut local: IntMap<u32, u32> = IntMap::default();
     let mut positions = Vec::new();
     let mut sources = Vec::new();
@@ -219,6 +242,20 @@ pub fn extract(mesh: &TriMesh, normals: &[Vec3], triangles: &[u32]) -> MeshPatch
         tris.push(tri);
     }
     let borders = border_loops(&tris);
+    let border_kinds = borders
+        .iter()
+        .map(|ring| {
+            (0..ring.len())
+                .map(|k| {
+                    let [a, b] = [ring[k], ring[(k + 1) % ring.len()]].map(|v| sources[v as usize]);
+                    match uses.get(&edge(a, b)) {
+                        Some(&n) if n >= 2 => EdgeKind::None,
+                        _ => EdgeKind::Sharp,
+                    }
+                })
+                .collect()
+        })
+        .collect();
     let normals = sources
         .iter()
         .map(|&v| normals.get(v as usize).copied().unwrap_or(Vec3::ZERO))
@@ -228,6 +265,7 @@ pub fn extract(mesh: &TriMesh, normals: &[Vec3], triangles: &[u32]) -> MeshPatch
         normals,
         triangles: tris,
         borders,
+        border_kinds,
         source_triangles: triangles.to_vec(),
         source_vertices: sources,
         hierarchy: Default::default(),
@@ -237,12 +275,7 @@ pub fn extract(mesh: &TriMesh, normals: &[Vec3], triangles: &[u32]) -> MeshPatch
 /// Closed loops of the edges used by exactly one triangle, walked in the triangles' winding.
 /// At a vertex where several border loops meet, each outgoing edge is used once.
 pub fn border_loops(triangles: &[[u32; 3]]) -> Vec<Vec<u32>> {
-    let mut uses: IntMap<(u32, u32), u32> = IntMap::default();
-    for t in triangles {
-        for k in 0..3 {
-            *uses.entry(edge(t[k], t[(k + 1) % 3])).or_default() += 1;
-        }
-    }
+    let uses = edge_uses(triangles);
     // Directed border edges a → b, by start vertex.
     let mut next: IntMap<u32, Vec<u32>> = IntMap::default();
     let mut starts = Vec::new();
@@ -396,6 +429,7 @@ mod tests {
             &m,
             &normals,
             &(0..m.triangles.len() as u32).collect::<Vec<_>>(),
+            &edge_uses(&m.triangles),
         );
         assert_eq!(whole.normals.len(), whole.positions.len());
         assert!(whole.normals.iter().all(|n| (n.z - 1.0).abs() < 1e-6));

@@ -5,6 +5,7 @@
 
 pub mod bezier;
 pub mod creases;
+pub mod edges;
 pub mod knots;
 pub mod memory;
 pub mod merge;
@@ -192,7 +193,15 @@ pub struct Scene {
 
 impl Scene {
     /// Builds a scene from Bézier surfaces, numbering the patches in order.
+    /// Sides that another patch repeats are classified as smooth or sharp edges
+    /// ([`edges::bezier_sides`]).
     pub fn from_bezier(surfaces: Vec<BezierPatch>, up: UpAxis) -> Scene {
+        let sides = edges::bezier_sides(&surfaces);
+        let surfaces: Vec<BezierPatch> = surfaces
+            .into_iter()
+            .zip(sides)
+            .map(|(s, k)| s.with_sides(k))
+            .collect();
         let bbox = box_of(
             surfaces
                 .iter()

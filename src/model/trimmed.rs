@@ -252,6 +252,9 @@ pub fn nearest_on_curve(curve: &Curve3D, p: DVec3) -> Option<DVec3> {
 pub struct LoopEdge {
     pub edge: Arc<TrimEdge>,
     pub forward: bool,
+    /// What the edge is between this face and the next (`model::edges`): sharp as read,
+    /// classified when the scene is prepared (`prep::step`).
+    pub kind: super::edges::EdgeKind,
 }
 
 /// Points along boundary loops that bound them: every edge's ends and parameter midpoint
@@ -602,6 +605,23 @@ impl SurfaceEval for TrimmedFace {
             pu.or(self.closed.0.map(|c| c.1)),
             pv.or(self.closed.1.map(|c| c.1)),
         )
+    }
+}
+
+/// Surface type name of a face.
+pub fn surface_kind(s: &TruckSurface) -> &'static str {
+    use truck_stepio::r#in::alias::ElementarySurface as E;
+    match s {
+        TruckSurface::ElementarySurface(e) => match e.as_ref() {
+            E::Plane(_) => "plane",
+            E::Sphere(_) => "sphere",
+            E::CylindricalSurface(_) => "cylinder",
+            E::ToroidalSurface(_) => "torus",
+            E::ConicalSurface(_) => "cone",
+        },
+        TruckSurface::SweptCurve(_) => "swept",
+        TruckSurface::BSplineSurface(_) => "b-spline",
+        TruckSurface::NurbsSurface(_) => "nurbs",
     }
 }
 

@@ -4,7 +4,7 @@
 
 use std::collections::HashMap;
 
-use crate::model::mesh::{MeshPatch, TriMesh, edge, extract, vertex_normals};
+use crate::model::mesh::{MeshPatch, TriMesh, edge, edge_uses, extract, vertex_normals};
 
 /// For every triangle, the triangles sharing each of its edges (non-manifold edges: all of
 /// them; boundary edges: none), sorted, as compressed rows: triangle `t`'s neighbours are
@@ -178,5 +178,9 @@ pub fn partition(mesh: &TriMesh, target: usize) -> Vec<MeshPatch> {
         computed = vertex_normals(mesh);
         &computed
     };
-    members.iter().map(|m| extract(mesh, normals, m)).collect()
+    let uses = edge_uses(&mesh.triangles);
+    members
+        .iter()
+        .map(|m| extract(mesh, normals, m, &uses))
+        .collect()
 }

@@ -1,7 +1,8 @@
 //! Load-time preparation of a STEP model: every face tessellated coarsely once (the probe:
-//! its bounds, and faces that cannot be trimmed are skipped with their reason), then placed
-//! by the product structure — one patch per face and placement, one [`Instance`] per placed
-//! shell, the scene in millimetres.
+//! its bounds, its normals along its edges, and faces that cannot be trimmed are skipped with
+//! their reason), its edges classified as sharp, smooth or seams by the faces that share
+//! them (`model::edges`), then placed by the product structure — one patch per face and
+//! placement, one [`Instance`] per placed shell, the scene in millimetres.
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -14,6 +15,7 @@ use crate::io::LoadError;
 use crate::io::step::StepModel;
 use crate::isolate::isolated;
 use crate::model::bezier::MAX_COORDINATE;
+use crate::model::edges::{EdgeNormals, EdgeUse, classify_shared};
 use crate::model::{
     Instance, Part, Patch, PatchSurface, Scene, SkippedFace, Sphere, UpAxis, bounding_box,
     transform_scale, trimmed::TrimmedFace,
@@ -24,8 +26,8 @@ use crate::util::{Bar, Progress};
 /// Coarse tolerance of the load-time tessellation, relative to a face's edge extent.
 const PROBE_TOLERANCE: f64 = 0.02;
 
-/// A face with its bounding box (own coordinates).
-type Probed = (TrimmedFace, (DVec3, DVec3));
+/// A face with its bounding box (own coordinates) and its normals along its edges.
+type Probed = (TrimmedFace, (DVec3, DVec3), Vec<Vec<EdgeNormals>>);
 
 /// Reads a STEP file from bytes (`path` is for messages) and prepares its scene.
 pub fn parse(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
@@ -50,7 +52,8 @@ pub fn assemble(model: StepModel, progress: &dyn Progress) -> Result<Scene, Load
             let out = r.and_then(|mut face| {
                 let (bounds, bbox) = probe(t, &face)?;
                 face.bounds = bounds;
-                Ok((face, bbox))
+                let normals = t.edge_normals(&face);
+                Ok((face, bbox, normals))
             });
             pb.advance();
             (id, out)
@@ -58,11 +61,13 @@ pub fn assemble(model: StepModel, progress: &dyn Progress) -> Result<Scene, Load
         .collect();
     drop(pb);
 
+    let mut probed = probed;
+    classify_edges(&mut probed);
     let mut faces: HashMap<u64, (Arc<TrimmedFace>, (DVec3, DVec3))> = HashMap::new();
     let mut skipped = Vec::new();
     for (id, r) in probed {
         match r {
-            Ok((face, bbox)) => {
+            Ok((face, bbox, _)) => {
                 faces.insert(id, (Arc::new(face), bbox));
             }
             Err(reason) => skipped.push(SkippedFace { face: id, reason }),
@@ -185,6 +190,36 @@ pub fn assemble(model: StepModel, progress: &dyn Progress) -> Result<Scene, Load
         warnings,
         unit: Some("mm"),
     })
+}
+
+/// Sets the kind of every edge of the probed faces (`model::edges::classify_shared`): the
+/// faces that use an edge (by its `EDGE_CURVE`) and their normals along it decide whether
+/// it is sharp, smooth or a seam.
+fn classify_edges(probed: &mut [(u64, Result<Probed, String>)]) {
+    let mut uses = Vec::new();
+    for (f, (_, r)) in probed.iter().enumerate() {
+        let Ok((face, _, normals)) = r else {
+            continue;
+        };
+        for (lp, ln) in face.loops.iter().zip(normals) {
+            for (le, &n) in lp.iter().zip(ln) {
+                uses.push(EdgeUse {
+                    edge: le.edge.id,
+                    face: f,
+                    normals: n,
+                });
+            }
+        }
+    }
+    let mut kinds = classify_shared(&uses).into_iter();
+    for (_, r) in probed.iter_mut() {
+        let Ok((face, _, _)) = r else {
+            continue;
+        };
+        for le in face.loops.iter_mut().flatten() {
+            le.kind = kinds.next().unwrap_or_default();
+        }
+    }
 }
 
 /// Coarse tessellation of a face: its bounding sphere (grown by the error) and box.

@@ -107,8 +107,9 @@ impl Renderer {
     }
 
     /// Records the draws of `meshes` into `pass` (surfaces, then the fat borders of
-    /// `variant`) with `pipes` and the globals bound by `bind`: the one encoding of a frame,
-    /// shared by the offscreen [`Renderer::render`] and a caller's pass ([`crate::embed`]).
+    /// `variant`, then with `edges` the edge lines the globals' mode selects) with `pipes`
+    /// and the globals bound by `bind`: the one encoding of a frame, shared by the offscreen
+    /// [`Renderer::render`] and a caller's pass ([`crate::embed`]).
     pub(crate) fn encode_into(
         &self,
         pass: &mut wgpu::RenderPass<'_>,
@@ -116,13 +117,19 @@ impl Renderer {
         pipes: &Pipelines,
         bind: &wgpu::BindGroup,
         variant: FatBorders,
+        edges: Option<&EdgePipelines>,
     ) {
         pass.set_bind_group(0, bind, &[]);
         match meshes {
-            Geometry::Uploaded(m) => m.encode(pass, pipes, &self.patterns, variant),
-            Geometry::Resident(r) => {
-                r.encode(pass, pipes, &self.patterns, variant, self.gpu.indirect)
-            }
+            Geometry::Uploaded(m) => m.encode(pass, pipes, &self.patterns, variant, edges),
+            Geometry::Resident(r) => r.encode(
+                pass,
+                pipes,
+                &self.patterns,
+                variant,
+                edges,
+                self.gpu.indirect,
+            ),
         }
     }
 
@@ -166,7 +173,7 @@ impl Renderer {
                 },
                 fat_border::template(opts.fat_borders).len() as u32,
                 opts.sections.len() as u32,
-                0,
+                opts.edges.bits() as u32,
             ],
             sections: opts.sections.gpu(),
         }
@@ -187,6 +194,9 @@ impl Renderer {
     ) -> Result<Vec<T>, RenderError> {
         let cut = !opts.sections.is_empty();
         self.pipelines_for(target, cut);
+        if opts.edges != Edges::Off {
+            self.edge_pipelines(target);
+        }
         if self.targets.get(&target).is_none_or(|t| t.size != (w, h)) {
             let t = Targets::new(&self.gpu, &self.bind_layout, target, w, h);
             self.targets.insert(target, t);
@@ -198,6 +208,9 @@ impl Renderer {
         } else {
             &self.pipelines[&target]
         };
+        let edges = (opts.edges != Edges::Off)
+            .then(|| self.edge_pipes.get(&target))
+            .flatten();
         let targets = &self.targets[&target];
         self.gpu
             .queue
@@ -238,7 +251,7 @@ impl Renderer {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            self.encode_into(&mut pass, meshes, pipes, bind, opts.fat_borders);
+            self.encode_into(&mut pass, meshes, pipes, bind, opts.fat_borders, edges);
         }
         read_texture(&self.gpu, encoder, targets, &mut self.last.gpu_wait)
     }

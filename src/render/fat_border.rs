@@ -302,8 +302,20 @@ pub struct BorderPoint {
     /// ([`WIDTH_MASK`]) | (ring length − 1) << [`RING_SHIFT`].
     pub info: u32,
     pub patch_id: u32,
-    /// The patch colour, packed (see `PatchMesh::color`).
+    /// The patch colour, packed (see `PatchMesh::color`); the alpha byte's two low bits are
+    /// the edge modes that draw the segment from this point to the next (what it runs
+    /// along, `model::edges::EdgeKind`: [`edge_bits`]), the rest of it says whether the
+    /// colour is the patch's own (≥ 128) or the default (< 128).
     pub color: [u8; 4],
+}
+
+/// Mask of the edge bits in the alpha byte of [`BorderPoint::color`].
+pub const EDGE_BITS: u8 = crate::model::edges::EDGE_ALL | crate::model::edges::EDGE_FEATURE;
+
+/// The packed colour `color` of a border point whose segment to the next runs along `kind`.
+pub fn edge_bits(color: [u8; 4], kind: crate::model::edges::EdgeKind) -> [u8; 4] {
+    let [r, g, b, a] = color;
+    [r, g, b, (a & !EDGE_BITS) | kind as u8]
 }
 
 /// Vertex indices per point: slot s of point k is vertex 8k + s.
@@ -504,7 +516,8 @@ impl BorderGeometry {
         let width = width_bits(m.border_width(), m.eps_border());
         let color = super::upload::packed_color(m.color);
         self.points.reserve(Self::points_of(m));
-        for ring in m.borders.iter().filter(|r| !r.is_empty()) {
+        for (r, ring) in m.borders.iter().enumerate().filter(|(_, r)| !r.is_empty()) {
+            let kinds = m.border_kinds.get(r);
             let n = ring.len();
             self.longest_ring = self.longest_ring.max(n);
             let span = ((n as u32 - 1) << RING_SHIFT) | width;
@@ -521,13 +534,15 @@ impl BorderGeometry {
                 if k + 1 == n {
                     info |= INFO_LAST;
                 }
+                // Unknown kinds: every segment a sharp edge.
+                let kind = kinds.and_then(|ks| ks.get(k)).copied().unwrap_or_default();
                 self.points.push(BorderPoint {
                     cur: at(0).into(),
                     eps,
                     normal: m.normals[ring[k] as usize].into(),
                     info,
                     patch_id: m.patch_id,
-                    color,
+                    color: edge_bits(color, kind),
                 });
             }
             let closing = BorderPoint {

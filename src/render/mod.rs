@@ -16,8 +16,10 @@
 //! readback buffer are kept between frames of the same size.
 
 mod draw;
+pub mod edges;
 pub mod fat_border;
 pub mod gpu;
+pub mod pick;
 mod pipelines;
 mod readback;
 pub mod resident;
@@ -32,10 +34,11 @@ pub use section::{SectionError, SectionPlane, Sections};
 pub use upload::GpuMeshes;
 
 use pipelines::Targets;
-pub(crate) use pipelines::{Globals, Pipelines, Target};
+pub(crate) use pipelines::{EdgePipelines, Globals, Pipelines, Target};
 use upload::{StaticKey, StaticPatch};
 
 use std::collections::HashMap;
+use std::ops::Range;
 use std::sync::{Arc, Mutex};
 
 use glam::DVec3;
@@ -63,6 +66,65 @@ impl std::str::FromStr for Shading {
             "flat" => Ok(Shading::Flat),
             "ids" => Ok(Shading::Ids),
             _ => Err(format!("shading must be lit, flat or ids, not {s:?}")),
+        }
+    }
+}
+
+/// Which edges of the model are drawn over the surfaces, as ~1 px dark lines along the
+/// border polylines of the frame (`model::edges` says what each border segment runs along).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Edges {
+    /// None (the default).
+    #[default]
+    Off,
+    /// Sharp edges only: free edges, creases, faces meeting at an angle; edges between faces
+    /// that meet smoothly (G1 within 1°) are left out.
+    Feature,
+    /// Every edge between faces, smooth ones too (not the seams of closed surfaces nor the
+    /// cuts between mesh patches).
+    All,
+}
+
+impl Edges {
+    /// Every choice, as the CLI spells it.
+    pub const NAMES: &'static str = "off, feature or all";
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Edges::Off => "off",
+            Edges::Feature => "feature",
+            Edges::All => "all",
+        }
+    }
+
+    /// The edge bits ([`crate::model::edges::EDGE_ALL`], `EDGE_FEATURE`) a segment needs
+    /// to be drawn in this mode (0: none is).
+    pub fn bits(self) -> u8 {
+        match self {
+            Edges::Off => 0,
+            Edges::Feature => crate::model::edges::EDGE_FEATURE,
+            Edges::All => crate::model::edges::EDGE_ALL,
+        }
+    }
+
+    /// The next mode of the viewer's `e` key: off → feature → all → off.
+    pub fn next(self) -> Edges {
+        match self {
+            Edges::Off => Edges::Feature,
+            Edges::Feature => Edges::All,
+            Edges::All => Edges::Off,
+        }
+    }
+}
+
+impl std::str::FromStr for Edges {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "off" => Ok(Edges::Off),
+            "feature" => Ok(Edges::Feature),
+            "all" => Ok(Edges::All),
+            _ => Err(format!("edges must be {}, not {s:?}", Edges::NAMES)),
         }
     }
 }
@@ -147,6 +209,13 @@ fn draw_points(
     }
 }
 
+/// Records the edge lines of points `start..start + count` of the bound points buffer
+/// (`vs_edge`: segment s from point s to s + 1, two vertices each; the shader drops the
+/// segments not drawn), with `instances` (placed points: their records).
+fn draw_edges(pass: &mut wgpu::RenderPass<'_>, start: u32, count: u32, instances: Range<u32>) {
+    pass.draw(2 * start..2 * (start + count), instances);
+}
+
 /// Default background (RGB, 0–255).
 pub const DEFAULT_BACKGROUND: [u8; 3] = [255, 255, 255];
 /// Default surface colour for `lit` shading (RGB, 0–1).
@@ -169,6 +238,8 @@ pub struct RenderOptions {
     pub ids: bool,
     /// Section planes: the model clipped and its cut capped ([`section`]).
     pub sections: Sections,
+    /// Edges drawn over the surfaces in the colour image (not in depth or IDs).
+    pub edges: Edges,
 }
 
 impl Default for RenderOptions {
@@ -182,6 +253,7 @@ impl Default for RenderOptions {
             depth: false,
             ids: false,
             sections: Sections::NONE,
+            edges: Edges::Off,
         }
     }
 }
@@ -281,6 +353,8 @@ pub struct Renderer {
     pipelines: HashMap<Target, Pipelines>,
     /// The same with section planes (fragment shaders `fs_*_cut`), built on first use.
     cut_pipelines: HashMap<Target, Pipelines>,
+    /// Edge pipelines per colour target, built when edges are first drawn.
+    edge_pipes: HashMap<Target, EdgePipelines>,
     /// Render targets, kept between frames of the same size.
     targets: HashMap<Target, Targets>,
     /// Static buffers of mesh patches' hierarchies, built on first use.
@@ -396,6 +470,7 @@ impl Renderer {
             patterns,
             pipelines: HashMap::new(),
             cut_pipelines: HashMap::new(),
+            edge_pipes: HashMap::new(),
             targets: HashMap::new(),
             statics: Mutex::new(HashMap::new()),
             strips: crate::strips::StripStore::new(),

@@ -29,6 +29,14 @@ pub(crate) struct Pipelines {
     pub(super) border_placed: wgpu::RenderPipeline,
 }
 
+/// The pipelines of the model's edges (`vs_edge`: line lists pulled from the border points)
+/// for a colour target: the patches' own points and the placed ones.
+#[derive(Debug)]
+pub(crate) struct EdgePipelines {
+    pub(super) own: wgpu::RenderPipeline,
+    pub(super) placed: wgpu::RenderPipeline,
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub(crate) enum Target {
     Color {
@@ -143,6 +151,48 @@ impl Targets {
     }
 }
 
+/// A target's formats: colour format, samples and the fragment entry point of its surfaces,
+/// depth format and depth test.
+struct Formats {
+    color: wgpu::TextureFormat,
+    samples: u32,
+    fs: &'static str,
+    depth: wgpu::TextureFormat,
+    compare: wgpu::CompareFunction,
+}
+
+impl Formats {
+    fn of(target: Target) -> Formats {
+        let (color, samples, fs) = match target {
+            Target::Color { samples } => (COLOR_FORMAT, samples, "fs_color"),
+            Target::Depth => (LINEAR_DEPTH_FORMAT, 1, "fs_depth"),
+            Target::Ids => (LINEAR_DEPTH_FORMAT, 1, "fs_id"),
+            Target::External { color, samples, .. } => (color, samples, "fs_color"),
+        };
+        let (depth, compare) = match target {
+            Target::External { depth, compare, .. } => (depth, compare),
+            _ => (DEPTH_FORMAT, wgpu::CompareFunction::LessEqual),
+        };
+        Formats {
+            color,
+            samples,
+            fs,
+            depth,
+            compare,
+        }
+    }
+}
+
+/// The instance attribute of placed draws: the index of the placement's record (group 2).
+fn instance_records() -> wgpu::VertexBufferLayout<'static> {
+    const ATTRS: [wgpu::VertexAttribute; 1] = wgpu::vertex_attr_array![4 => Uint32];
+    wgpu::VertexBufferLayout {
+        array_stride: 4,
+        step_mode: wgpu::VertexStepMode::Instance,
+        attributes: &ATTRS,
+    }
+}
+
 impl Renderer {
     /// The pipelines of `target`, if built.
     pub(crate) fn built_pipelines(&self, target: Target) -> Option<&Pipelines> {
@@ -170,22 +220,104 @@ impl Renderer {
         &self.cut_pipelines[&target]
     }
 
+    /// The edge pipelines of colour target `target` (built on first use: most renders draw
+    /// no edges). `None` for the depth and ID targets, which draw none.
+    pub(crate) fn edge_pipelines(&mut self, target: Target) -> Option<&EdgePipelines> {
+        if matches!(target, Target::Depth | Target::Ids) {
+            return None;
+        }
+        if !self.edge_pipes.contains_key(&target) {
+            let f = Formats::of(target);
+            let edge = |label, layout, vs, buffers| {
+                self.pipeline(
+                    &f,
+                    label,
+                    (layout, vs, buffers),
+                    wgpu::PrimitiveTopology::LineList,
+                    // Tested against the surfaces, not written.
+                    ("fs_edge", false),
+                )
+            };
+            let p = EdgePipelines {
+                own: edge("edges", &self.border_layout, "vs_edge", &[]),
+                placed: edge(
+                    "placed edges",
+                    &self.placed_border_layout,
+                    "vs_edge_placed",
+                    &[Some(instance_records())],
+                ),
+            };
+            self.edge_pipes.insert(target, p);
+        }
+        self.edge_pipes.get(&target)
+    }
+
+    /// One pipeline of the scene's shader for a target's formats `f`: its vertex stage
+    /// (layout, entry point, buffers), topology and fragment stage (entry point, whether it
+    /// writes depth); no culling (CAD patches are not consistently oriented).
+    fn pipeline(
+        &self,
+        f: &Formats,
+        label: &str,
+        (layout, vs, buffers): (
+            &wgpu::PipelineLayout,
+            &str,
+            &[Option<wgpu::VertexBufferLayout<'_>>],
+        ),
+        topology: wgpu::PrimitiveTopology,
+        (fs, depth_write): (&str, bool),
+    ) -> wgpu::RenderPipeline {
+        self.gpu
+            .device
+            .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(label),
+                layout: Some(layout),
+                vertex: wgpu::VertexState {
+                    module: &self.module,
+                    entry_point: Some(vs),
+                    compilation_options: Default::default(),
+                    buffers,
+                },
+                primitive: wgpu::PrimitiveState {
+                    topology,
+                    strip_index_format: (topology == wgpu::PrimitiveTopology::TriangleStrip)
+                        .then_some(wgpu::IndexFormat::Uint32),
+                    cull_mode: None,
+                    ..Default::default()
+                },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: f.depth,
+                    depth_write_enabled: Some(depth_write),
+                    depth_compare: Some(f.compare),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: wgpu::MultisampleState {
+                    count: f.samples,
+                    ..Default::default()
+                },
+                fragment: Some(wgpu::FragmentState {
+                    module: &self.module,
+                    entry_point: Some(fs),
+                    compilation_options: Default::default(),
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format: f.color,
+                        blend: None,
+                        write_mask: wgpu::ColorWrites::ALL,
+                    })],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+    }
+
     pub(super) fn build_pipelines(&self, target: Target, cut: bool) -> Pipelines {
-        let (format, samples, fs) = match target {
-            Target::Color { samples } => (COLOR_FORMAT, samples, "fs_color"),
-            Target::Depth => (LINEAR_DEPTH_FORMAT, 1, "fs_depth"),
-            Target::Ids => (LINEAR_DEPTH_FORMAT, 1, "fs_id"),
-            Target::External { color, samples, .. } => (color, samples, "fs_color"),
-        };
-        let fs = match (fs, cut) {
-            (_, false) => fs,
+        let mut f = Formats::of(target);
+        f.fs = match (f.fs, cut) {
+            (fs, false) => fs,
             ("fs_depth", true) => "fs_depth_cut",
             ("fs_id", true) => "fs_id_cut",
             _ => "fs_color_cut",
-        };
-        let (depth_format, depth_compare) = match target {
-            Target::External { depth, compare, .. } => (depth, compare),
-            _ => (DEPTH_FORMAT, wgpu::CompareFunction::LessEqual),
         };
         let surface_attrs = wgpu::vertex_attr_array![
             0 => Float32x3, 1 => Float32x3, 2 => Uint32, 3 => Unorm8x4
@@ -195,12 +327,6 @@ impl Renderer {
             step_mode: wgpu::VertexStepMode::Vertex,
             attributes: &surface_attrs,
         })];
-        let placed_attrs = wgpu::vertex_attr_array![4 => Uint32];
-        let instances = wgpu::VertexBufferLayout {
-            array_stride: 4,
-            step_mode: wgpu::VertexStepMode::Instance,
-            attributes: &placed_attrs,
-        };
         let placed_vertex_attrs = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3];
         let placed_surface_buffers = [
             Some(wgpu::VertexBufferLayout {
@@ -208,59 +334,19 @@ impl Renderer {
                 step_mode: wgpu::VertexStepMode::Vertex,
                 attributes: &placed_vertex_attrs,
             }),
-            Some(instances.clone()),
+            Some(instance_records()),
         ];
-        let placed_border_buffers = [Some(instances)];
+        let placed_border_buffers = [Some(instance_records())];
         let make = |label: &str,
                     layout: &wgpu::PipelineLayout,
                     vs: &str,
                     buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
                     strip: bool| {
-            self.gpu
-                .device
-                .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: Some(label),
-                    layout: Some(layout),
-                    vertex: wgpu::VertexState {
-                        module: &self.module,
-                        entry_point: Some(vs),
-                        compilation_options: Default::default(),
-                        buffers,
-                    },
-                    primitive: wgpu::PrimitiveState {
-                        topology: if strip {
-                            wgpu::PrimitiveTopology::TriangleStrip
-                        } else {
-                            wgpu::PrimitiveTopology::TriangleList
-                        },
-                        strip_index_format: strip.then_some(wgpu::IndexFormat::Uint32),
-                        cull_mode: None,
-                        ..Default::default()
-                    },
-                    depth_stencil: Some(wgpu::DepthStencilState {
-                        format: depth_format,
-                        depth_write_enabled: Some(true),
-                        depth_compare: Some(depth_compare),
-                        stencil: Default::default(),
-                        bias: Default::default(),
-                    }),
-                    multisample: wgpu::MultisampleState {
-                        count: samples,
-                        ..Default::default()
-                    },
-                    fragment: Some(wgpu::FragmentState {
-                        module: &self.module,
-                        entry_point: Some(fs),
-                        compilation_options: Default::default(),
-                        targets: &[Some(wgpu::ColorTargetState {
-                            format,
-                            blend: None,
-                            write_mask: wgpu::ColorWrites::ALL,
-                        })],
-                    }),
-                    multiview_mask: None,
-                    cache: None,
-                })
+            let topology = match strip {
+                true => wgpu::PrimitiveTopology::TriangleStrip,
+                false => wgpu::PrimitiveTopology::TriangleList,
+            };
+            self.pipeline(&f, label, (layout, vs, buffers), topology, (f.fs, true))
         };
         Pipelines {
             surface: make(

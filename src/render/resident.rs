@@ -767,6 +767,7 @@ impl ResidentGeometry {
         pipes: &Pipelines,
         patterns: &[wgpu::Buffer; 3],
         variant: FatBorders,
+        edges: Option<&EdgePipelines>,
         indirect: bool,
     ) {
         self.draws.encode(
@@ -778,5 +779,9 @@ impl ResidentGeometry {
             variant,
             &self.placed,
         );
+        if let Some(e) = edges {
+            self.draws.encode_edges(pass, e, &self.arenas);
+            self.placed.encode_edges(pass, e, &self.arenas);
+        }
     }
 }

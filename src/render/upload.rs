@@ -186,13 +186,14 @@ impl GpuMeshes {
         self.border_vertex_count
     }
 
-    /// Records the draws of `variant` into `pass`.
+    /// Records the draws of `variant` (and with `edges`, the edge lines) into `pass`.
     pub(super) fn encode(
         &self,
         pass: &mut wgpu::RenderPass<'_>,
         pipes: &super::pipelines::Pipelines,
         patterns: &[wgpu::Buffer; 3],
         variant: FatBorders,
+        edges: Option<&EdgePipelines>,
     ) {
         for (pipeline, indices, count) in [
             (&pipes.surface, &self.indices, self.index_count),
@@ -221,6 +222,13 @@ impl GpuMeshes {
             for (bind, points) in &self.border_points {
                 pass.set_bind_group(1, bind, &[]);
                 draw_points(pass, patterns, variant, 0, *points);
+            }
+        }
+        if let Some(e) = edges {
+            pass.set_pipeline(&e.own);
+            for (bind, points) in &self.border_points {
+                pass.set_bind_group(1, bind, &[]);
+                draw_edges(pass, 0, *points, 0..1);
             }
         }
     }

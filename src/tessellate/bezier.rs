@@ -20,7 +20,7 @@
 
 use glam::DVec3;
 
-use super::PatchMesh;
+use super::{PatchMesh, dedup_ring};
 use crate::model::BezierPatch;
 
 /// Upper limit on the segments per parameter direction (protects memory when ε is tiny).
@@ -109,6 +109,7 @@ impl BezierTessellator {
         out.normals.clear();
         out.triangles.clear();
         out.borders.clear();
+        out.border_kinds.clear();
         out.eps_target = eps;
         out.resolution = Resolution { nu, nv };
 
@@ -153,19 +154,18 @@ impl BezierTessellator {
         out.stopped = (error > eps && nu >= MAX_SEGMENTS && nv >= MAX_SEGMENTS)
             .then_some(super::Stop::Segments(MAX_SEGMENTS));
 
-        // Border loop: u = 0 (v up), v = 1 (u up), u = 1 (v down), v = 0 (u down).
+        // Border loop: u = 0 (v up), v = 1 (u up), u = 1 (v down), v = 0 (u down), each
+        // vertex with the kind of the side its segment to the next runs along.
+        let sides = patch.sides();
         let mut ring = Vec::with_capacity(2 * (cu + cv));
-        ring.extend((0..cv).map(|j| idx(0, j)));
-        ring.extend((1..cu).map(|i| idx(i, cv - 1)));
-        ring.extend((0..cv - 1).rev().map(|j| idx(cu - 1, j)));
-        ring.extend((1..cu - 1).rev().map(|i| idx(i, 0)));
-        let pos = &out.positions;
-        ring.dedup_by(|b, a| pos[*a as usize] == pos[*b as usize]);
-        while ring.len() > 1 && pos[ring[0] as usize] == pos[ring[ring.len() - 1] as usize] {
-            ring.pop();
-        }
+        ring.extend((0..cv - 1).map(|j| (idx(0, j), sides[0])));
+        ring.extend((0..cu - 1).map(|i| (idx(i, cv - 1), sides[1])));
+        ring.extend((1..cv).rev().map(|j| (idx(cu - 1, j), sides[2])));
+        ring.extend((1..cu).rev().map(|i| (idx(i, 0), sides[3])));
+        let (ring, kinds) = dedup_ring(&ring, &out.positions);
         if ring.len() >= 2 {
             out.borders.push(ring);
+            out.border_kinds.push(kinds);
         }
         out.border_error = Some(border_error(patch, nu, nv, &out.positions));
     }

@@ -14,6 +14,7 @@ use glam::{DMat3, DVec3, Vec3};
 use rayon::prelude::*;
 
 use crate::isolate::isolated;
+use crate::model::edges::EdgeKind;
 use crate::model::{Patch, PatchSurface, Scene};
 use crate::mt::CutState;
 use crate::view::View;
@@ -28,6 +29,10 @@ pub struct PatchMesh {
     /// Closed border loops as indices into `positions` (first vertex not repeated at the end);
     /// consecutive duplicates (collapsed edges at poles) are removed.
     pub borders: Vec<Vec<u32>>,
+    /// Per border loop, per vertex k: what the loop runs along from vertex k to the next
+    /// (an edge of the model, sharp or smooth, or none: [`EdgeKind`]); what `--edges` draws.
+    /// Empty when not known: every segment is then a sharp edge.
+    pub border_kinds: Vec<Vec<EdgeKind>>,
     /// Tolerance asked for, object units.
     pub eps_target: f64,
     /// Measured maximum distance between surface and triangles (sampled), object units.
@@ -191,6 +196,7 @@ impl PatchMesh {
             normals: shared.normals.clone(),
             triangles: shared.triangles.clone(),
             borders: shared.borders.clone(),
+            border_kinds: shared.border_kinds.clone(),
             eps_target: self.eps_target,
             error: self.error,
             resolution: self.resolution,
@@ -221,6 +227,8 @@ impl PatchMesh {
             + cap(&self.triangles)
             + cap(&self.borders)
             + self.borders.iter().map(cap).sum::<usize>()
+            + cap(&self.border_kinds)
+            + self.border_kinds.iter().map(cap).sum::<usize>()
             + self.failure.as_ref().map_or(0, String::capacity)
             + self.arcs.as_ref().map_or(0, |a| cap(&a.ranges))
     }
@@ -343,6 +351,7 @@ fn mesh_patch(
         out.triangles.clear();
         out.triangles.extend_from_slice(&m.triangles);
         out.borders = m.borders.clone();
+        out.border_kinds = m.border_kinds.clone();
         out.error = 0.0;
     } else {
         let h = &m.hierarchy;
@@ -359,6 +368,7 @@ fn mesh_patch(
                 .extend_from_slice(&h.triangles[first as usize..(first + count) as usize]);
         }
         h.cut_borders(state, &m.borders, &mut out.borders);
+        cut_border_kinds(h, state, m, &mut out.border_kinds);
         out.arcs = Some(CutRanges {
             patch: m.clone(),
             ranges,
@@ -370,11 +380,74 @@ fn mesh_patch(
     out.resolution = Resolution { nu: 1, nv: 1 };
 }
 
+/// A closed border loop from its vertices, each with the kind of its segment to the next:
+/// consecutive vertices at one position (a side collapsed to a pole, a vertex two edges
+/// share) kept once — the first of each run, with the kind of the run's last segment, the
+/// one that leaves it — and trailing vertices at the first one's position dropped.
+pub(crate) fn dedup_ring(
+    ring: &[(u32, EdgeKind)],
+    positions: &[Vec3],
+) -> (Vec<u32>, Vec<EdgeKind>) {
+    let at = |v: u32| positions[v as usize];
+    let mut ids: Vec<u32> = Vec::with_capacity(ring.len());
+    let mut kinds: Vec<EdgeKind> = Vec::with_capacity(ring.len());
+    for &(v, kind) in ring {
+        match (ids.last(), kinds.last_mut()) {
+            (Some(&last), Some(k)) if at(last) == at(v) => *k = kind,
+            _ => {
+                ids.push(v);
+                kinds.push(kind);
+            }
+        }
+    }
+    while ids.len() > 1 && at(ids[0]) == at(ids[ids.len() - 1]) {
+        ids.pop();
+        kinds.pop();
+    }
+    (ids, kinds)
+}
+
+/// The kinds of the border segments of a cut (the loops `cut_borders` gives): a border
+/// vertex the cut collapsed joins its two segments into one, which is the strongest edge
+/// it replaces (a crease shortened onto a cut stays a crease).
+fn cut_border_kinds(
+    h: &crate::mt::MtHierarchy,
+    state: &CutState,
+    m: &crate::model::mesh::MeshPatch,
+    out: &mut Vec<Vec<EdgeKind>>,
+) {
+    out.clear();
+    for (ring, kinds) in m.borders.iter().zip(&m.border_kinds) {
+        let n = ring.len();
+        let alive: Vec<usize> = (0..n).filter(|&k| h.vertex_alive(state, ring[k])).collect();
+        if alive.len() < 2 {
+            continue;
+        }
+        out.push(
+            alive
+                .iter()
+                .zip(alive.iter().cycle().skip(1))
+                .map(|(&k, &next)| {
+                    let span = match (next + n - k) % n {
+                        0 => n,
+                        s => s,
+                    };
+                    (0..span)
+                        .map(|s| kinds[(k + s) % n])
+                        .max()
+                        .unwrap_or_default()
+                })
+                .collect(),
+        );
+    }
+}
+
 fn fail(out: &mut PatchMesh, eps: f64, why: String) {
     out.positions.clear();
     out.normals.clear();
     out.triangles.clear();
     out.borders.clear();
+    out.border_kinds.clear();
     out.error = 0.0;
     out.eps_target = eps;
     out.failure = Some(why);

@@ -8,8 +8,10 @@
 //! rasterizer the copy is a small part of the frame; images, checks and the window share one
 //! drawing path.
 //!
-//! Mouse: left drag orbits, right drag (or shift + left) pans, wheel zooms. Keys: arrows orbit,
-//! PageUp/PageDown zoom, `f` fit to view, `b` fat borders off/6/4/2, `w` wireframe, `i` patch-ID
+//! Mouse: left drag orbits, right drag (or shift + left) pans, wheel zooms, a left click picks
+//! (what the pixel shows and the distance from the click before, `render::pick`). Keys: arrows orbit,
+//! PageUp/PageDown zoom, `f` fit to view, `b` fat borders off/6/4/2, `e` edges of the model
+//! off/feature/all (`render::Edges`), `w` wireframe, `i` patch-ID
 //! colours, `h` error heat map (screen error per patch: blue finer than asked, green on target,
 //! red coarser), `5` orthographic / perspective projection (as f3d), `+`/`-` pixel error ×2 /
 //! ÷2, `p` screenshot, space plays/pauses the
@@ -34,12 +36,13 @@ use crate::frame::{FrameState, StepOptions};
 use crate::lod::LodOptions;
 use crate::model::Scene;
 use crate::render::gpu::Gpu;
-use crate::render::{FatBorders, Frame, RenderError, RenderOptions, Renderer, Shading};
+use crate::render::{Edges, FatBorders, Frame, RenderError, RenderOptions, Renderer, Shading};
 use crate::tessellate::PatchMesh;
 use crate::view::{Framing, Projection, View};
 
 mod orbit;
 mod overlay;
+mod pick;
 mod present;
 
 pub use orbit::Orbit;
@@ -78,9 +81,11 @@ fn os_reason(e: &str) -> &str {
 /// The mouse and keys of the window (printed by `patchwork view --help` and, with `?`, by the
 /// window on stderr).
 pub const CONTROLS: &str = "\
-Mouse: left drag orbits, right drag (or shift + left drag) pans, the wheel zooms.
+Mouse: left drag orbits, right drag (or shift + left drag) pans, the wheel zooms,
+       a left click prints what it shows (part, face, surface, point; distance from the last).
 Keys:  arrows orbit, PageUp / PageDown zoom, f fit to view, 5 orthographic / perspective,
-       b fat borders off / 6 / 4 / 2, w wireframe, i patch-ID colours,
+       b fat borders off / 6 / 4 / 2, e edges off / feature / all, w wireframe,
+       i patch-ID colours,
        h screen-error heat map (blue finer than asked, green on target, red coarser),
        + / - pixel error x2 / /2, p screenshot, space play / pause (--implode),
        c section planes on / off (--section),
@@ -113,9 +118,14 @@ pub struct ViewerOptions {
     pub primitives: crate::render::Primitives,
     /// Section planes (`c` turns them off and on).
     pub sections: crate::render::Sections,
+    /// The edges drawn at the start (`e` cycles off / feature / all).
+    pub edges: Edges,
     /// Where the viewer's messages go (the adapter chosen, screenshots written, a screenshot
     /// that failed): the library prints nothing; the binary passes a function that does.
     pub notify: fn(&str),
+    /// Where a click's pick goes (what the pixel shows, the distance from the click before;
+    /// `render::pick`): data, where `notify`'s messages are diagnostics.
+    pub picked: fn(&str),
 }
 
 /// The viewer's animation: the parts (or patches) fly together over `frames` frames, stay
@@ -226,6 +236,7 @@ pub fn run_upgrading(
         }
     };
     let ortho = options.framing.ortho;
+    let edges = options.edges;
     let mut app = App {
         scene,
         upgrade,
@@ -235,12 +246,15 @@ pub fn run_upgrading(
         state: None,
         error: None,
         fat_borders: FatBorders::Six,
+        edges,
         shading: Shading::Lit,
         ortho,
         wireframe: false,
         sections_on: true,
         heat: false,
         drag: None,
+        pressed_at: None,
+        last_pick: None,
         cursor: PhysicalPosition::new(0.0, 0.0),
         shift: false,
         dirty: true,
@@ -281,6 +295,8 @@ struct App {
     state: Option<State>,
     error: Option<ViewerError>,
     fat_borders: FatBorders,
+    /// Edges of the model drawn (`e` cycles).
+    edges: Edges,
     shading: Shading,
     /// Orthographic projection (`5` toggles).
     ortho: bool,
@@ -289,6 +305,10 @@ struct App {
     sections_on: bool,
     heat: bool,
     drag: Option<MouseButton>,
+    /// Where the left button went down: released there, it is a click (a pick).
+    pressed_at: Option<PhysicalPosition<f64>>,
+    /// The point of the last pick, for the distance to the next.
+    last_pick: Option<DVec3>,
     cursor: PhysicalPosition<f64>,
     shift: bool,
     /// Something changed since the last frame (camera, settings, queue not empty).
@@ -413,6 +433,7 @@ impl App {
                 } else {
                     crate::render::Sections::NONE
                 },
+                edges: self.edges,
                 ..RenderOptions::default()
             },
             offsets: offsets.as_deref(),
@@ -452,14 +473,15 @@ impl App {
         if self.last_title.elapsed() > Duration::from_millis(250) || self.options.frames.is_some() {
             let (max, _) = state.frame.lod.screen_errors();
             state.window.set_title(&format!(
-                "{} — {:.1} fps, {} triangles, queue {}, max error {:.2} px, pixel error {}, fat borders {}",
+                "{} — {:.1} fps, {} triangles, queue {}, max error {:.2} px, pixel error {}, fat borders {}, edges {}",
                 self.options.title,
                 1.0 / dt.as_secs_f64().max(1e-6),
                 stats.triangles,
                 stats.queue_left,
                 max,
                 state.frame.lod.options.pixel_error,
-                self.fat_borders.name()
+                self.fat_borders.name(),
+                self.edges.name()
             ));
             self.last_title = Instant::now();
         }
@@ -531,6 +553,7 @@ impl App {
                     FatBorders::Two => FatBorders::Off,
                 }
             }
+            Key::Character("e") => self.edges = self.edges.next(),
             Key::Character("w") => self.wireframe = !self.wireframe,
             Key::Character("c") => self.sections_on = !self.sections_on,
             Key::Character("5") => self.ortho = !self.ortho,
@@ -643,6 +666,7 @@ impl ApplicationHandler for App {
             }
             WindowEvent::MouseInput { state, button, .. } => {
                 self.drag = (state == ElementState::Pressed).then_some(button);
+                self.click(state, button);
             }
             WindowEvent::CursorMoved { position, .. } => {
                 let (dx, dy) = (position.x - self.cursor.x, position.y - self.cursor.y);

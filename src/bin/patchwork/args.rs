@@ -14,7 +14,9 @@ use glam::DVec3;
 use patchwork::lod::LodOptions;
 use patchwork::model::Scene;
 use patchwork::prep::{Hierarchies, LoadOptions};
-use patchwork::render::{FatBorders, Primitives, RenderOptions, SectionPlane, Sections, Shading};
+use patchwork::render::{
+    Edges, FatBorders, Primitives, RenderOptions, SectionPlane, Sections, Shading,
+};
 use patchwork::view::{self, Framing, NamedView, View};
 
 use crate::error::CliError;
@@ -327,6 +329,18 @@ pub struct DrawArgs {
     pub msaa: u32,
     #[command(flatten)]
     pub primitives: PrimitivesArg,
+    #[command(flatten)]
+    pub edges: EdgesArg,
+}
+
+/// Edges of the model drawn over the surfaces (`render`, `implode`, `view`).
+#[derive(Args, Debug, Clone, Copy)]
+pub struct EdgesArg {
+    /// Edges drawn as dark lines: off, feature (sharp edges: free edges, creases, faces
+    /// meeting at an angle; edges between faces meeting smoothly within 1 degree left out) or
+    /// all (every edge between faces). STEP faces, Bezier patches, mesh creases.
+    #[arg(long, default_value = "off")]
+    pub edges: Edges,
 }
 
 impl DrawArgs {
@@ -337,6 +351,7 @@ impl DrawArgs {
             fat_borders: self.fat_borders,
             msaa: self.msaa,
             depth: false,
+            edges: self.edges.edges,
             ..RenderOptions::default()
         }
     }

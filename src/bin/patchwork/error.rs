@@ -16,6 +16,7 @@ use patchwork::io::depth::DepthError;
 use patchwork::io::gltf_out::GltfWriteError;
 use patchwork::io::png::WriteError;
 use patchwork::render::RenderError;
+use patchwork::render::pick::PickError;
 #[cfg(feature = "viewer")]
 use patchwork::viewer::ViewerError;
 
@@ -25,6 +26,8 @@ pub enum CliError {
     Load(#[from] LoadError),
     #[error(transparent)]
     Render(#[from] RenderError),
+    #[error("--pick: {0}")]
+    Pick(#[from] PickError),
     #[error(transparent)]
     Check(#[from] CheckError),
     #[error(transparent)]

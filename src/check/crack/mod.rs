@@ -538,6 +538,7 @@ pub fn check_render_options(fat_borders: FatBorders) -> RenderOptions {
         depth: true,
         ids: false,
         sections: crate::render::Sections::NONE,
+        edges: crate::render::Edges::Off,
     }
 }
 

@@ -41,7 +41,7 @@
 use glam::{DMat4, DVec2, DVec3};
 
 use crate::model::poles::{self, Pole};
-use crate::model::trimmed::{SurfaceEval, TrimmedFace, TruckSurface};
+use crate::model::trimmed::{SurfaceEval, TrimmedFace};
 use crate::tessellate::PatchMesh;
 
 mod boundary;
@@ -98,22 +98,8 @@ impl FaceFidelity {
     }
 }
 
-/// Surface type name of a face.
-pub fn surface_kind(s: &TruckSurface) -> &'static str {
-    use truck_stepio::r#in::alias::ElementarySurface as E;
-    match s {
-        TruckSurface::ElementarySurface(e) => match e.as_ref() {
-            E::Plane(_) => "plane",
-            E::Sphere(_) => "sphere",
-            E::CylindricalSurface(_) => "cylinder",
-            E::ToroidalSurface(_) => "torus",
-            E::ConicalSurface(_) => "cone",
-        },
-        TruckSurface::SweptCurve(_) => "swept",
-        TruckSurface::BSplineSurface(_) => "b-spline",
-        TruckSurface::NurbsSurface(_) => "nurbs",
-    }
-}
+/// Surface type name of a face (`model::trimmed::surface_kind`).
+pub use crate::model::trimmed::surface_kind;
 
 /// Tessellates every patch of `scene` for `view` at `pixel_error` as the renderer does and
 /// measures each trimmed one against its face. Sorted worst first, with the patch id.

@@ -471,6 +471,7 @@ fn chain(edges: Vec<TrimEdge>, de: usize) -> Result<Vec<LoopEdge>, IgesError> {
         .map(|(e, forward)| LoopEdge {
             edge: Arc::new(e),
             forward,
+            kind: Default::default(),
         })
         .collect())
 }

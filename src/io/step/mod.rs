@@ -584,7 +584,11 @@ fn convert_face(
                 let (e, fit) = convert_edge(file, table, ecid, holder, uncertainty, by_vertex)?;
                 Ok((Arc::new(e), fit))
             })?;
-            out.push(LoopEdge { edge, forward });
+            out.push(LoopEdge {
+                edge,
+                forward,
+                kind: Default::default(),
+            });
         }
         if !bound.orientation {
             out.reverse();

@@ -111,6 +111,7 @@ pub(super) fn whole_surface_loop(
         .map(|e| LoopEdge {
             edge: Arc::new(e),
             forward: true,
+            kind: Default::default(),
         })
         .collect();
     (lp.len() == 2).then_some(lp)

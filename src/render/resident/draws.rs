@@ -211,6 +211,26 @@ impl DrawList {
         placed.encode_borders(pass, pipes, &patterns[v], arenas, variant);
     }
 
+    /// Records the edge lines of the patches' own points (one draw per merged range of
+    /// points).
+    pub(super) fn encode_edges(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        pipes: &EdgePipelines,
+        arenas: &[Arena],
+    ) {
+        if self.ranges[POINTS].is_empty() {
+            return;
+        }
+        pass.set_pipeline(&pipes.own);
+        for (a, first, n) in runs(&self.ranges[POINTS]) {
+            pass.set_bind_group(1, &arenas[a].points_bind.1, &[]);
+            for &(_, [start, count]) in &self.ranges[POINTS][first..first + n] {
+                draw_edges(pass, start, count, 0..1);
+            }
+        }
+    }
+
     /// Records the fat-border draws of `variant` (pattern `v`) of the patches' own points.
     #[allow(clippy::too_many_arguments)]
     fn encode_borders(

@@ -433,6 +433,32 @@ impl PlacedDraws {
         }
     }
 
+    /// Records the edge lines of the placed patches: each shared mesh's points once per
+    /// placement.
+    pub(super) fn encode_edges(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        pipes: &EdgePipelines,
+        arenas: &[Arena],
+    ) {
+        let (Some(list), Some((_, records))) = (&self.buffer, &self.records) else {
+            return;
+        };
+        if !self.groups.iter().any(|g| g.1[POINTS].is_some()) {
+            return;
+        }
+        pass.set_pipeline(&pipes.placed);
+        pass.set_bind_group(2, records, &[]);
+        pass.set_vertex_buffer(0, list.slice(..));
+        for &(a, ranges, first, count) in &self.groups {
+            let Some((start, len)) = ranges[POINTS] else {
+                continue;
+            };
+            pass.set_bind_group(1, &arenas[a].points_bind.1, &[]);
+            draw_edges(pass, start as u32, len as u32, first..first + count);
+        }
+    }
+
     /// Records the fat-border draws of `variant` (its index pattern `pattern`) of the placed
     /// patches.
     pub(super) fn encode_borders(

@@ -358,7 +358,11 @@ pub(super) fn refine_border(
 /// wide cone's base circle to its first sample was split on the surface, a straight line in
 /// (u, v) 3 mm off the hyperbola: the face was drawn outside its trim (generated model
 /// gen-1-42, 11 T from Open CASCADE).
-fn curve_between(face: &TrimmedFace, a: BPoint, b: BPoint) -> Option<(&LoopEdge, u32, u32, f64)> {
+pub(super) fn curve_between(
+    face: &TrimmedFace,
+    a: BPoint,
+    b: BPoint,
+) -> Option<(&LoopEdge, u32, u32, f64)> {
     let edge = |l: u32, e: u32| face.loops.get(l as usize)?.get(e as usize);
     let at = |p: DVec3, q: DVec3| p.distance(q) <= 1e-9 * (1.0 + p.length());
     // An edge's first and last point in the loop's direction, with their parameters.

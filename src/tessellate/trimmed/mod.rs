@@ -40,6 +40,7 @@ use spade::{ConstrainedDelaunayTriangulation, HierarchyHintGenerator, Point2, Tr
 type Cdt = ConstrainedDelaunayTriangulation<Point2<f64>, (), (), (), HierarchyHintGenerator<f64>>;
 
 use super::{PatchMesh, Resolution, Stop};
+use crate::model::edges::{EdgeKind, EdgeNormals, SAMPLES};
 use crate::model::poles::{LoopPoint, expand_poles};
 use crate::model::trimmed::{
     Interval, LoopEdge, SurfaceEval, TrimmedFace, TruckSurface, parameter_bounds,
@@ -195,6 +196,7 @@ impl TrimmedTessellator {
         out.normals.clear();
         out.triangles.clear();
         out.borders.clear();
+        out.border_kinds.clear();
         out.eps_target = eps;
         out.error = 0.0;
         out.stopped = None;
@@ -363,23 +365,19 @@ impl TrimmedTessellator {
             let tri = [take(t[0], out), take(t[1], out), take(t[2], out)];
             out.triangles.push(tri);
         }
-        for ids in &border_ids {
-            let mut ring: Vec<u32> = Vec::with_capacity(ids.len());
-            for &i in ids {
-                let r = take(i, out);
-                let p = out.positions[r as usize];
-                if ring.last().is_some_and(|&l| out.positions[l as usize] == p) {
-                    continue;
-                }
-                ring.push(r);
-            }
-            while ring.len() > 1
-                && out.positions[ring[0] as usize] == out.positions[ring[ring.len() - 1] as usize]
-            {
-                ring.pop();
-            }
+        for (ids, lp) in border_ids.iter().zip(&loops) {
+            // Each vertex with what its segment to the next runs along (`model::edges`).
+            let ring: Vec<(u32, EdgeKind)> = (0..ids.len())
+                .map(|k| {
+                    let kind = curve_between(face, lp[k], lp[(k + 1) % lp.len()])
+                        .map_or(EdgeKind::None, |(le, ..)| le.kind);
+                    (take(ids[k], out), kind)
+                })
+                .collect();
+            let (ring, kinds) = super::dedup_ring(&ring, &out.positions);
             if ring.len() >= 2 {
                 out.borders.push(ring);
+                out.border_kinds.push(kinds);
             }
         }
         if !out.positions.iter().all(|p| p.is_finite()) {
@@ -387,6 +385,47 @@ impl TrimmedTessellator {
         }
         self.loops = loops;
         Ok(report)
+    }
+
+    /// The face's unit normals at the [`SAMPLES`] of each of its edges (per loop, per edge;
+    /// `model::edges` compares them across the faces that share an edge), after a successful
+    /// [`TrimmedTessellator::tessellate`] of `face`: each sample is found on the surface from
+    /// the parameter of the nearest point of that edge's border polyline. `None` where the
+    /// search fails or the surface has no normal (a pole).
+    pub fn edge_normals(&self, face: &TrimmedFace) -> Vec<Vec<EdgeNormals>> {
+        // The polyline's parameters (curve, surface) per edge of the face.
+        let mut on_edge: std::collections::HashMap<(u32, u32), Vec<(f64, DVec2)>> =
+            Default::default();
+        for b in self.loops.iter().flatten() {
+            if let Some((l, j, s)) = b.src {
+                on_edge.entry((l, j)).or_default().push((s, b.uv));
+            }
+        }
+        face.loops
+            .iter()
+            .enumerate()
+            .map(|(li, lp)| {
+                lp.iter()
+                    .enumerate()
+                    .map(|(k, le)| {
+                        let e = &le.edge;
+                        SAMPLES.map(|f| {
+                            let t = e.t0 + f * (e.t1 - e.t0);
+                            let hint = on_edge
+                                .get(&(li as u32, k as u32))
+                                .into_iter()
+                                .flatten()
+                                .min_by(|a, b| (a.0 - t).abs().total_cmp(&(b.0 - t).abs()))
+                                .map(|&(_, uv)| uv);
+                            let uv = face.project(e.point(t), hint)?;
+                            let (su, sv) = face.derivs(uv);
+                            let n = su.cross(sv).normalize_or_zero();
+                            (n != DVec3::ZERO).then_some(n)
+                        })
+                    })
+                    .collect()
+            })
+            .collect()
     }
 
     /// Inserts a parameter point (3D position given for border points, else evaluated).

@@ -6,6 +6,7 @@ pub mod check;
 pub mod export;
 pub mod implode;
 pub mod merge;
+mod pick;
 pub mod render;
 pub mod stats;
 #[cfg(feature = "viewer")]

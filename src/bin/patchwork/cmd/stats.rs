@@ -42,6 +42,17 @@ pub struct StatsArgs {
     /// with Open CASCADE's judgement of that mesh).
     #[arg(long)]
     tolerance: Option<f64>,
+    /// What pixel X,Y (column, row from the top left) of `render`'s image at the same camera
+    /// flags shows: part, face (STEP / IGES entity id), surface type and the 3-D point under
+    /// the pixel's centre (`nothing` over the background); repeated, also the distance from
+    /// the pick before. A pixel outside the image is an error.
+    #[arg(
+        long,
+        value_name = "X,Y",
+        value_parser = super::pick::parse_pixel,
+        allow_hyphen_values = true
+    )]
+    pick: Vec<(i64, i64)>,
 }
 
 pub fn run(args: &StatsArgs) -> Result<bool, CliError> {
@@ -75,10 +86,29 @@ fn run_one(args: &StatsArgs, file: &Path) -> Result<Value, CliError> {
     let dt = t0.elapsed();
     let s = MeshStats::of(&meshes);
     let faces = measure_meshes_with(&scene, &meshes, &super::Bar::default());
-    let report = json_report(
+    let mut report = json_report(
         args, file, &scene, &view, &camera, &s, &faces, &meshes, load_ms, dt,
     );
+    // `--pick`: printed after the figures (what `render` draws: the view's tessellation,
+    // whatever --tolerance asked here).
+    let picks = || -> Result<Option<Value>, CliError> {
+        if args.pick.is_empty() {
+            return Ok(None);
+        }
+        let drawn;
+        let shown = match tolerance {
+            Some(_) => {
+                drawn = tessellate_scene(&scene, &view, camera.pixel_error);
+                &drawn
+            }
+            None => &meshes,
+        };
+        super::pick::run(&scene, shown, &view, &args.pick).map(Some)
+    };
     if out::json() {
+        if let Some(p) = picks()? {
+            report["picks"] = p;
+        }
         return Ok(report);
     }
     data!("file              {}", file.display());
@@ -201,6 +231,9 @@ fn run_one(args: &StatsArgs, file: &Path) -> Result<Value, CliError> {
         if args.parts {
             print_parts(&scene, &meshes);
         }
+    }
+    if let Some(p) = picks()? {
+        report["picks"] = p;
     }
     Ok(report)
 }

@@ -7,9 +7,11 @@ use clap::Args;
 use patchwork::anim::GroupBy;
 use patchwork::viewer::{ViewerAnimation, ViewerOptions, script_key};
 
-use crate::args::{BudgetArgs, CameraArgs, PrimitivesArg, at_least, distance, lod_options};
+use crate::args::{
+    BudgetArgs, CameraArgs, EdgesArg, PrimitivesArg, at_least, distance, lod_options,
+};
 use crate::error::CliError;
-use crate::out::note;
+use crate::out::{data, note};
 
 #[derive(Args, Debug)]
 #[command(after_help = patchwork::viewer::CONTROLS)]
@@ -54,6 +56,9 @@ pub struct ViewArgs {
     primitives: PrimitivesArg,
     #[command(flatten)]
     section: crate::args::SectionArgs,
+    /// The edges drawn at the start (`e` cycles off / feature / all).
+    #[command(flatten)]
+    edges: EdgesArg,
 }
 
 pub fn run(args: &ViewArgs) -> Result<(), CliError> {
@@ -132,7 +137,9 @@ pub fn run(args: &ViewArgs) -> Result<(), CliError> {
             }),
             primitives: args.primitives.primitives,
             sections,
+            edges: args.edges.edges,
             notify: |m| note!("{m}"),
+            picked: |m| data!("{m}"),
         },
         upgrade,
     )?;
