@@ -101,8 +101,8 @@ const TEMPLATE_6: [u32; 18] = [
     c(0, 1),
     c(1, 6),
     c(1, 3),
-    // joint fans around v_i, from the far end of the segment quad's edge v_i1–v_i4 (see
-    // `FAN_APEXES`)
+    // joint fans around v_i, from the far end of the segment quad's edge v_i1–v_i4 (module
+    // doc, "No T-junctions")
     c(0, 4),
     c(0, 3),
     c(0, 2),
@@ -246,7 +246,7 @@ pub fn expand(prev: Vec3, cur: Vec3, next: Vec3, viewer: Vec4, eps: f32, code: u
         }
     } else if code & MITRE_FLAG != 0 {
         // The 2-vertex variant has no fans: its band is ε·cos(θ/2) wide at a joint turning by
-        // θ at the bisector points, and let pixels through at the corners of zigzag mesh
+        // θ at the bisector points, and lets pixels through at the corners of zigzag mesh
         // borders; at the mitre points it holds the whole ε-neighbourhood of both segments.
         let mitre = (2.0 / sum.length().max(TINY)).min(MITRE_LIMIT);
         match slot {
