@@ -10,7 +10,7 @@
 //!   coloured face's;
 //! - every face tessellated to one ε in its own units: the absolute tolerance divided by the
 //!   placement's scale, or, for a pixel error, the finest ε that any placement of the same face
-//!   asks for in [`default_view`].
+//!   asks for in `default_view`.
 //!
 //! Guarantees: deterministic (instances, patches and meshes in scene order); the tolerance is
 //! checked first, so a bad one never starts tessellating. Not done: faces whose tessellation
@@ -28,12 +28,12 @@ use crate::tessellate::{PatchMesh, Tessellators};
 use crate::view::{self, View};
 
 /// Image size of [`default_view`], the view a pixel error is measured in.
-pub const EXPORT_VIEW_SIZE: (u32, u32) = (1024, 768);
+pub(crate) const EXPORT_VIEW_SIZE: (u32, u32) = (1024, 768);
 
 /// How finely the faces are tessellated.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Tolerance {
-    /// Screen-space error in pixels, in [`default_view`].
+    /// Screen-space error in pixels, in `default_view`.
     PixelError(f64),
     /// Absolute error in model units (millimetres for STEP).
     Absolute(f64),
@@ -84,7 +84,7 @@ pub fn metres_per_unit(unit: &str) -> Option<f64> {
 
 /// The rotation taking a model whose up axis is `from` to one whose up axis is `to`, keeping
 /// its front facing the viewer (z-up front −y ↔ y-up front +z): ∓90° about x.
-pub fn up_rotation(from: UpAxis, to: UpAxis) -> DMat4 {
+pub(crate) fn up_rotation(from: UpAxis, to: UpAxis) -> DMat4 {
     match (from, to) {
         (UpAxis::Z, UpAxis::Y) => DMat4::from_rotation_x(-std::f64::consts::FRAC_PI_2),
         (UpAxis::Y, UpAxis::Z) => DMat4::from_rotation_x(std::f64::consts::FRAC_PI_2),
@@ -105,7 +105,7 @@ pub enum ExportError {
 
 /// The view a [`Tolerance::PixelError`] is measured in: the scene framed from the default
 /// direction, [`view::DEFAULT_FOV_Y_DEG`], [`EXPORT_VIEW_SIZE`].
-pub fn default_view(scene: &Scene) -> View {
+pub(crate) fn default_view(scene: &Scene) -> View {
     View::framing(
         &scene.bounds,
         scene.up.vector(),
@@ -115,7 +115,7 @@ pub fn default_view(scene: &Scene) -> View {
 }
 
 /// Whether two patches draw the same surface (the same face placed twice).
-pub fn same_surface(a: &Patch, b: &Patch) -> bool {
+pub(crate) fn same_surface(a: &Patch, b: &Patch) -> bool {
     match (&a.surface, &b.surface) {
         (PatchSurface::Trimmed(x), PatchSurface::Trimmed(y)) => std::sync::Arc::ptr_eq(x, y),
         _ => a.id == b.id,

@@ -12,7 +12,7 @@
 //! loop's generation moved. An animation moves patches: they are tessellated for where they
 //! are drawn (moved bounding spheres) and translated at upload; moved and heat-mapped frames
 //! change every mesh's vertices, so they go through [`Renderer::upload`] whole. Optionally the
-//! frame is judged against the watertight reference ([`crate::check::crack::Judge`]), with fat
+//! frame is judged against the watertight reference (`crate::check::crack::Judge`), with fat
 //! borders as drawn and, as a control, without them.
 
 use std::time::{Duration, Instant};

@@ -4,7 +4,7 @@ use glam::DVec3;
 
 /// Closest point to `p` on the triangle `(a, b, c)` (degenerate triangles included), by the
 /// Voronoi-region walk of Ericson, *Real-Time Collision Detection* (2005), §5.1.5.
-pub fn closest_point_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
+pub(crate) fn closest_point_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
     let ab = b - a;
     let ac = c - a;
     if ab.cross(ac) == DVec3::ZERO {
@@ -61,7 +61,7 @@ fn nearest_edge_point(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
 }
 
 /// Closest point to `p` on the segment `s..e`.
-pub fn closest_point_on_segment(p: DVec3, s: DVec3, e: DVec3) -> DVec3 {
+pub(crate) fn closest_point_on_segment(p: DVec3, s: DVec3, e: DVec3) -> DVec3 {
     let d = e - s;
     let len2 = d.length_squared();
     if len2 <= 0.0 {

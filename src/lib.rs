@@ -46,27 +46,49 @@
 //! # }
 //! ```
 //!
-//! The other modules are public for patchwork's own command-line tool, tests and benchmarks
-//! (offscreen rendering, crack checks, readers and export); `embed` is all a renderer needs.
+//! # What is public
+//!
+//! A caller needs [`embed`], [`prep`] (loading a file into a [`model::Scene`]) and [`model`].
+//! The other modules are `pub` only because patchwork's own command-line tool, tests, benchmarks
+//! and examples are separate crates that use them (offscreen rendering, crack checks, readers,
+//! export); they are hidden from these docs and are not a stable API. Items that nothing outside
+//! the library uses are `pub(crate)`.
 
+#[doc(hidden)]
 pub mod anim;
+#[doc(hidden)]
 pub mod check;
+#[doc(hidden)]
 pub mod drive;
 pub mod embed;
+#[doc(hidden)]
 pub mod export;
+#[doc(hidden)]
 pub mod frame;
+#[doc(hidden)]
 pub mod geom;
+#[doc(hidden)]
 pub mod io;
+#[doc(hidden)]
 pub mod isolate;
+#[doc(hidden)]
 pub mod lod;
 pub mod model;
+#[doc(hidden)]
 pub mod mt;
 pub mod prep;
+#[doc(hidden)]
 pub mod render;
+#[doc(hidden)]
 pub mod report;
+#[doc(hidden)]
 pub mod strips;
+#[doc(hidden)]
 pub mod tessellate;
+#[doc(hidden)]
 pub mod util;
+#[doc(hidden)]
 pub mod view;
 #[cfg(feature = "viewer")]
+#[doc(hidden)]
 pub mod viewer;

@@ -11,7 +11,7 @@
 //!
 //! Patches are tessellated where they are assembled (their surfaces never change, so the LOD
 //! frame loop's cached tessellations stay valid) with the ε of where they are drawn (their
-//! bounding spheres are moved: [`moved_scene`]), and translated when uploaded
+//! bounding spheres are moved: `moved_scene`), and translated when uploaded
 //! ([`translated`]; a translation keeps every error). Fat borders are recomputed from each
 //! frame's meshes, so they hold whichever neighbours a patch has in that frame.
 
@@ -160,7 +160,7 @@ pub fn amount(k: usize, n: usize, explode: bool) -> f64 {
 
 /// `scene` with every patch's bounding sphere moved by its offset (the surfaces stay where
 /// they are assembled): ε and culling for where the patches are drawn.
-pub fn moved_scene(scene: &Scene, offsets: &[DVec3]) -> Scene {
+pub(crate) fn moved_scene(scene: &Scene, offsets: &[DVec3]) -> Scene {
     let mut s = scene.clone();
     for (p, o) in s.patches.iter_mut().zip(offsets) {
         p.bounds.center += *o;

@@ -234,7 +234,7 @@ impl IdImage {
     }
 
     /// Inverse of [`IdImage::to_rgba`].
-    pub fn from_rgba(img: &image::RgbaImage) -> IdImage {
+    pub(crate) fn from_rgba(img: &image::RgbaImage) -> IdImage {
         IdImage {
             width: img.width(),
             height: img.height(),
@@ -284,7 +284,7 @@ impl IdImage {
     }
 
     /// A picture for people: a colour per patch, white background, red where `other` differs.
-    pub fn diff_image(&self, other: &IdImage) -> image::RgbaImage {
+    pub(crate) fn diff_image(&self, other: &IdImage) -> image::RgbaImage {
         let rgba: Vec<u8> = self
             .ids
             .iter()
@@ -544,7 +544,7 @@ pub struct BorderShading {
 }
 
 /// Per-pixel FLIP error of `test` against `reference`.
-pub fn flip_map(reference: &image::RgbaImage, test: &image::RgbaImage) -> Vec<f32> {
+pub(crate) fn flip_map(reference: &image::RgbaImage, test: &image::RgbaImage) -> Vec<f32> {
     nv_flip::flip(
         to_flip(reference),
         to_flip(test),

@@ -7,7 +7,7 @@
 //! at or behind the eye plane are skipped (no clipping: the views frame the whole model, whose
 //! bounding sphere lies beyond the near plane). Ties on shared edges are decided by "≥ 0"
 //! rather than the GPU's top-left rule, so edge pixels may differ from a GPU image by one
-//! pixel; compare away from ID boundaries ([`boundary_distance`]).
+//! pixel; compare away from ID boundaries (`boundary_distance`).
 
 use glam::{DVec3, DVec4};
 
@@ -85,7 +85,7 @@ pub fn id_image(meshes: &[PatchMesh], view: &View) -> IdImage {
 
 /// Chebyshev distance (px) of every pixel to the nearest pixel whose ID differs from its
 /// own (background included), capped at `cap`.
-pub fn boundary_distance(img: &IdImage, cap: u32) -> Vec<u32> {
+pub(crate) fn boundary_distance(img: &IdImage, cap: u32) -> Vec<u32> {
     let (w, h) = (img.width as usize, img.height as usize);
     let mut d = vec![cap; w * h];
     for y in 0..h {

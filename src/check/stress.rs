@@ -10,8 +10,8 @@
 //! Independent tessellations from [`crate::tessellate`] come nowhere near that bound along
 //! their borders (shared straight edges even coincide), so a crack check on them passes with
 //! fat borders of a quarter width. [`stress_tessellation`] builds a tessellation that uses the
-//! allowance: each patch is tessellated to [`STRESS_EPS_FRACTION`] of its ε (measured error e),
-//! then every border vertex is moved by δ = [`STRESS_RETREAT`] · (ε − e) perpendicular to its
+//! allowance: each patch is tessellated to `STRESS_EPS_FRACTION` of its ε (measured error e),
+//! then every border vertex is moved by δ = `STRESS_RETREAT` · (ε − e) perpendicular to its
 //! border and to the view, towards the patch's inside ([`retreat_border`]). Every point of the
 //! mesh moves by at most δ, so the mesh stays within e + δ ≤ ε of its surface: an honest level,
 //! reported as the patch's achieved error. With e ≤ ε/4 (what the fine tessellation measures),
@@ -44,9 +44,9 @@ use crate::tessellate::{PatchMesh, tessellate_scene};
 use crate::view::View;
 
 /// The stress tessellation's triangles are made to this fraction of each patch's ε.
-pub const STRESS_EPS_FRACTION: f64 = 0.25;
+pub(crate) const STRESS_EPS_FRACTION: f64 = 0.25;
 /// Fraction of the error left over (ε − measured) that borders are moved by.
-pub const STRESS_RETREAT: f64 = 0.8;
+pub(crate) const STRESS_RETREAT: f64 = 0.8;
 
 /// Moves every vertex of `mesh`'s border loops by `amount(position)` object units, perpendicular
 /// to the border there and to the direction towards the viewer (homogeneous, as
@@ -122,7 +122,7 @@ pub fn retreat_border(mesh: &mut PatchMesh, viewer: Vec4, amount: impl Fn(Vec3) 
 }
 
 /// The stress tessellation of `scene` for `view` at `pixel_error` (see the module doc): every
-/// patch within its ε, every border pulled back by [`STRESS_RETREAT`] of what is left of ε.
+/// patch within its ε, every border pulled back by `STRESS_RETREAT` of what is left of ε.
 /// Each mesh reports ε as its target and e + δ as its achieved error; its fat borders are drawn
 /// with ε. A patch whose fine tessellation already misses ε (or failed) is left as it is.
 pub fn stress_tessellation(scene: &Scene, view: &View, pixel_error: f64) -> Vec<PatchMesh> {

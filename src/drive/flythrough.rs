@@ -235,7 +235,11 @@ fn percentile(values: &mut [f64], q: f64) -> f64 {
 }
 
 /// Summary figures of a run whose camera jumps at `jump_frame`.
-pub fn summarize(records: &[FrameRecord], initial_ms: f64, jump_frame: usize) -> FlythroughSummary {
+pub(crate) fn summarize(
+    records: &[FrameRecord],
+    initial_ms: f64,
+    jump_frame: usize,
+) -> FlythroughSummary {
     let mut frame: Vec<f64> = records.iter().map(|r| r.frame_ms).collect();
     let mut tess: Vec<f64> = records.iter().map(|r| r.tessellation_ms).collect();
     let mut cpu: Vec<f64> = records.iter().map(|r| r.cpu_ms).collect();

@@ -4,7 +4,7 @@
 //! each stage cost in time and memory.
 //!
 //! The models are grids of Utah teapots (N × N copies of `models/teapot.bpt`'s 32 patches,
-//! [`GRID_SPACING`] apart; 32·N² patches) and any file `prep::load` reads (STEP assemblies).
+//! `GRID_SPACING` apart; 32·N² patches) and any file `prep::load` reads (STEP assemblies).
 //! A grid is written as a real `.bpt` file first ([`write_grid`], streamed) and loaded through
 //! [`crate::prep::load`] like any other file: reading and parsing the text is part of what is
 //! measured. The file is written just before it is read, so it is read from the page cache —
@@ -34,10 +34,10 @@ use crate::render::{RenderOptions, Renderer};
 use crate::util::{peak_rss_bytes, rss_bytes};
 
 /// The Utah teapot (32 bicubic patches), the grid's unit.
-pub const TEAPOT_BPT: &str = include_str!("../../models/teapot.bpt");
+pub(crate) const TEAPOT_BPT: &str = include_str!("../../models/teapot.bpt");
 
 /// Distance between neighbouring teapots of a grid (the teapot is about 6.4 × 4 × 3.2 units).
-pub const GRID_SPACING: f64 = 8.0;
+pub(crate) const GRID_SPACING: f64 = 8.0;
 
 /// The sweep's grid sizes N: 1 152, 10 368, 100 352 and 1 002 528 patches.
 pub const DEFAULT_GRID_SIZES: [usize; 4] = [6, 18, 56, 177];

@@ -107,7 +107,7 @@ fn temp_beside(target: &Path, suffix: &str) -> io::Result<PathBuf> {
 /// A file being written under a temporary name; [`AtomicFile::commit`] puts it in place.
 /// Dropped uncommitted (an error, a panic), it removes its temporary file.
 #[derive(Debug)]
-pub struct AtomicFile {
+pub(crate) struct AtomicFile {
     target: PathBuf,
     tmp: PathBuf,
     key: u64,
@@ -138,8 +138,9 @@ impl AtomicFile {
         }
     }
 
-    /// The temporary file's path (for tests and messages).
-    pub fn temp_path(&self) -> &Path {
+    /// The temporary file's path (for tests).
+    #[cfg(test)]
+    pub(crate) fn temp_path(&self) -> &Path {
         &self.tmp
     }
 
@@ -198,7 +199,7 @@ impl Drop for AtomicFile {
     }
 }
 
-/// Writes `bytes` to `path` through an [`AtomicFile`].
+/// Writes `bytes` to `path` through an `AtomicFile`.
 pub fn write(path: &Path, bytes: &[u8]) -> io::Result<()> {
     let mut file = AtomicFile::create(path)?;
     file.write_all(bytes)?;

@@ -27,14 +27,14 @@
 //! with the byte offset), empty or whitespace-only file ([`LoadError::Empty`]), zero patches
 //! ([`LoadError::NoPatches`]), a token that is not a number, a negative or out-of-range count,
 //! an unexpected end of file or trailing data ([`LoadError::Parse`]), and invalid patches —
-//! degree above [`MAX_DEGREE`], NaN or infinite coordinate, a coordinate beyond
-//! ±[`MAX_COORDINATE`] (f32's range for squared lengths: such a model cannot be framed or
+//! degree above `MAX_DEGREE`, NaN or infinite coordinate, a coordinate beyond
+//! ±`MAX_COORDINATE` (f32's range for squared lengths: such a model cannot be framed or
 //! drawn, so it is an error rather than a warning), all control points equal
 //! ([`LoadError::Patch`]).
 //!
 //! The reader never panics and never allocates in proportion to a count it has not yet seen
-//! backed by data: the patch count is capped at [`MAX_PATCHES`] and only reserves a little
-//! space, and a degree above [`MAX_DEGREE`] is reported from the patch header before any control
+//! backed by data: the patch count is capped at `MAX_PATCHES` and only reserves a little
+//! space, and a degree above `MAX_DEGREE` is reported from the patch header before any control
 //! point is read.
 
 use std::path::Path;
@@ -45,7 +45,7 @@ use super::LoadError;
 use crate::model::bezier::{BezierPatch, MAX_COORDINATE, MAX_DEGREE, PatchError};
 
 /// Largest patch count accepted in a file header.
-pub const MAX_PATCHES: u64 = 10_000_000;
+pub(crate) const MAX_PATCHES: u64 = 10_000_000;
 
 /// Reads and parses a `.bpt` file.
 pub fn read(path: &Path) -> Result<Vec<BezierPatch>, LoadError> {

@@ -11,10 +11,10 @@
 use thiserror::Error;
 
 /// A 16-bit greyscale image, as [`super::png::write_gray16`] writes it.
-pub type Gray16Image = image::ImageBuffer<image::Luma<u16>, Vec<u16>>;
+pub(crate) type Gray16Image = image::ImageBuffer<image::Luma<u16>, Vec<u16>>;
 
 /// The largest encoded value: the far plane.
-pub const FAR: u16 = u16::MAX;
+pub(crate) const FAR: u16 = u16::MAX;
 
 /// Why a depth buffer could not be encoded.
 #[derive(Debug, Error)]
@@ -27,7 +27,7 @@ pub enum DepthError {
     Range { near: f64, far: f64 },
 }
 
-/// The depth range of an encoding: 0 at `near`, [`FAR`] at `far` (object units).
+/// The depth range of an encoding: 0 at `near`, `FAR` at `far` (object units).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DepthRange {
     pub near: f64,
@@ -47,7 +47,7 @@ impl DepthRange {
     }
 
     /// One depth → its 16-bit value (clamped to the range; non-finite = far).
-    pub fn encode_one(&self, z: f64) -> u16 {
+    pub(crate) fn encode_one(&self, z: f64) -> u16 {
         let t = if z.is_finite() {
             ((z - self.near) / (self.far - self.near)).clamp(0.0, 1.0)
         } else {
@@ -57,7 +57,7 @@ impl DepthRange {
     }
 
     /// One 16-bit value → the depth it stands for.
-    pub fn decode_one(&self, v: u16) -> f64 {
+    pub(crate) fn decode_one(&self, v: u16) -> f64 {
         self.near + (self.far - self.near) * f64::from(v) / f64::from(FAR)
     }
 

@@ -16,7 +16,7 @@ use crate::model::bezier::MAX_COORDINATE;
 pub use crate::model::mesh::TriMesh;
 
 /// Whether `mesh` has something to draw (issue 21's bad-input policy): every vertex within
-/// ±[`MAX_COORDINATE`] (the GPU's f32 range for squared lengths) and at least one triangle
+/// ±`MAX_COORDINATE` (the GPU's f32 range for squared lengths) and at least one triangle
 /// with an area. A triangle counts as without area when its corners are collinear or
 /// coincide up to f32 rounding: `|e1 × e2| ≤ 10⁻⁶ |e1| |e2|` (an angle below 10⁻⁶ rad) or
 /// below the rounding of its coordinates. A model made only of such triangles would render as
@@ -312,11 +312,11 @@ fn linear_to_srgb(c: f32) -> f32 {
 /// `vn` normals where faces name them, and each material's diffuse colour (`Kd` of the
 /// `mtllib` files, read as sRGB) as the colour of its faces' group.
 #[cfg(feature = "obj")]
-pub fn read_obj(path: &Path) -> Result<TriMesh, LoadError> {
+pub(crate) fn read_obj(path: &Path) -> Result<TriMesh, LoadError> {
     parse_obj(&read_bytes(path)?, path)
 }
 
-/// As [`read_obj`], from the file's bytes (`path` names it in errors; material files are
+/// As `read_obj`, from the file's bytes (`path` names it in errors; material files are
 /// read from its folder: relative names below it only, as glTF buffers — a material file
 /// that is missing, unreadable or outside is a warning in [`TriMesh::warnings`] and its
 /// faces are drawn in the default colour).
@@ -684,7 +684,7 @@ fn color_groups(mesh: &mut TriMesh, colors: &[Option<[f32; 3]>]) {
 
 /// Without the `obj` feature: an error naming it.
 #[cfg(not(feature = "obj"))]
-pub fn read_obj(path: &Path) -> Result<TriMesh, LoadError> {
+pub(crate) fn read_obj(path: &Path) -> Result<TriMesh, LoadError> {
     Err(LoadError::NotBuiltIn {
         path: path.to_path_buf(),
         format: "OBJ",

@@ -144,7 +144,7 @@ impl LoadError {
 }
 
 /// Most bytes a compressed model may expand to.
-pub const MAX_GUNZIPPED_BYTES: u64 = 4 << 30;
+pub(crate) const MAX_GUNZIPPED_BYTES: u64 = 4 << 30;
 
 /// Without the `gzip` feature: an error naming it.
 #[cfg(not(feature = "gzip"))]
@@ -199,7 +199,7 @@ pub enum Model {
 
 /// The length unit a format states for its coordinates: metres for glTF (`.glb`, `.gltf`);
 /// `None` for formats that state none. STEP scenes carry theirs (millimetres) themselves.
-pub fn stated_unit(path: &Path) -> Option<&'static str> {
+pub(crate) fn stated_unit(path: &Path) -> Option<&'static str> {
     let extension = path.extension()?.to_string_lossy().to_ascii_lowercase();
     matches!(extension.as_str(), "glb" | "gltf").then_some("m")
 }
@@ -212,7 +212,10 @@ pub fn read(path: &Path) -> Result<Model, LoadError> {
 }
 
 /// As [`read`], reporting long steps (a STEP file's faces) to `progress`.
-pub fn read_with(path: &Path, progress: &dyn crate::util::Progress) -> Result<Model, LoadError> {
+pub(crate) fn read_with(
+    path: &Path,
+    progress: &dyn crate::util::Progress,
+) -> Result<Model, LoadError> {
     let extension = path
         .extension()
         .map(|e| e.to_string_lossy().into_owned())

@@ -2,7 +2,7 @@
 //! large mesh takes seconds, reading them back milliseconds.
 //!
 //! One file per model, named by a [`CacheKey`]: a 128-bit hash of the model file's bytes, the
-//! preparation parameters (patch size, arc size) and [`FORMAT_VERSION`] — a changed file, other
+//! preparation parameters (patch size, arc size) and `FORMAT_VERSION` — a changed file, other
 //! parameters or another format never match. The file is our own little-endian format:
 //!
 //! ```text
@@ -30,7 +30,7 @@ use crate::mt::{MtHierarchy, MtParts};
 /// build's quadrics start at zero (not glam's identity), border corners collapse, and the
 /// reduction merges nodes within `mt::MAX_MERGE_ERROR_RATIO`: other hierarchies. 5: node
 /// errors are certified bounds (`mt::bound`), not samples: other errors and hierarchies.
-pub const FORMAT_VERSION: u32 = 5;
+pub(crate) const FORMAT_VERSION: u32 = 5;
 
 const MAGIC: &[u8; 8] = b"PWMTCACH";
 const HEADER: usize = 8 + 4 + 16 + 8 + 16;
@@ -42,7 +42,7 @@ pub struct CacheKey(pub [u64; 2]);
 
 impl CacheKey {
     /// The key of a model file's `bytes` prepared with `params` (e.g. patch size and the arc
-    /// size's bits), for this [`FORMAT_VERSION`].
+    /// size's bits), for this `FORMAT_VERSION`.
     pub fn new(bytes: &[u8], params: &[u64]) -> CacheKey {
         let file = crate::util::hash128(bytes);
         let mut all = Vec::with_capacity(8 * (3 + params.len()));

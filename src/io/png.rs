@@ -53,7 +53,7 @@ pub fn write_text(path: &Path, text: &str) -> Result<(), WriteError> {
 }
 
 /// Writes bytes (a cache file) atomically, like the images.
-pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<(), WriteError> {
+pub(crate) fn write_bytes(path: &Path, bytes: &[u8]) -> Result<(), WriteError> {
     write_atomic(path, |file| {
         file.write_all(bytes).map_err(|source| WriteError::Io {
             path: path.to_owned(),
@@ -76,7 +76,7 @@ fn encode_err(path: &Path, e: image::ImageError) -> WriteError {
 }
 
 /// Writes any 8- or 16-bit image buffer as PNG, atomically.
-pub fn write_png<P>(
+pub(crate) fn write_png<P>(
     path: &Path,
     image: &image::ImageBuffer<P, Vec<P::Subpixel>>,
 ) -> Result<(), WriteError>

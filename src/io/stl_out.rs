@@ -5,7 +5,7 @@
 //! triangle a facet normal, three vertices as little-endian `f32` and a zero attribute
 //! word). STL has no units, names, colours or instancing: every placement is written out, and
 //! the unit is whatever the export chose (`export --unit`, millimetres by default for STL).
-//! Written to a temporary name and renamed ([`crate::io::png::write_bytes`]).
+//! Written to a temporary name and renamed (`crate::io::png::write_bytes`).
 
 use std::path::{Path, PathBuf};
 

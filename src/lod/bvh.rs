@@ -4,7 +4,7 @@
 //! sees (issue 19; Balázs et al. §4.2 cull before they queue).
 //!
 //! Built once per frame loop, top-down: a node's patches are split at the median of their
-//! centres along the longest axis of the centres' box, down to [`LEAF_SIZE`] patches. Every
+//! centres along the longest axis of the centres' box, down to `LEAF_SIZE` patches. Every
 //! node keeps a sphere around its patches' spheres. A query tests a node's sphere and skips
 //! the whole subtree when it misses the frustum, takes the whole subtree untested when the
 //! sphere lies wholly inside it (the common case of a view over the whole model); otherwise,
@@ -17,7 +17,7 @@ use crate::model::Sphere;
 use crate::view::Frustum;
 
 /// Most patches in a leaf.
-pub const LEAF_SIZE: usize = 8;
+pub(crate) const LEAF_SIZE: usize = 8;
 
 /// One node: a sphere around its patches, and either two children or a range of
 /// [`Bvh::order`].
@@ -35,7 +35,7 @@ struct Node {
 
 /// The hierarchy (see the module doc).
 #[derive(Clone, Debug, Default)]
-pub struct Bvh {
+pub(crate) struct Bvh {
     nodes: Vec<Node>,
     /// Patch indices, leaf by leaf.
     order: Vec<u32>,
@@ -85,11 +85,6 @@ impl Bvh {
                 stack.push(n + 1);
             }
         }
-    }
-
-    /// Nodes in the hierarchy.
-    pub fn node_count(&self) -> usize {
-        self.nodes.len()
     }
 }
 

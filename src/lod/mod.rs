@@ -8,7 +8,7 @@
 //! borders always use each patch's *current* ε_c, so the picture stays crack-free while the
 //! queue catches up.
 //!
-//! **Order** ([`priority`]). The paper weighs a patch by (ε_c/ε_w)² when too coarse and by
+//! **Order** (`priority`). The paper weighs a patch by (ε_c/ε_w)² when too coarse and by
 //! ε_w/ε_c when too fine, so a patch far too fine could go before one slightly too coarse,
 //! and a tiny patch before a large one. Here the queue takes the patches that are too coarse
 //! first, by what their error shows: screen error (pixels, γ·ε_c/ε_w) × screen area
@@ -18,7 +18,7 @@
 //!
 //! **Reuse within ε.** A trimmed face's tessellation made at level ε_m may hold a finer level
 //! too: a plane bounded by lines is exact at every ε. When its measured errors (surface
-//! samples within [`REFINE_TARGET`]·ε, trim chords within ε/2: the standard a fresh
+//! samples within `REFINE_TARGET`·ε, trim chords within ε/2: the standard a fresh
 //! tessellation is made to) hold the wanted level, the patch keeps its triangles, relabelled
 //! to that level's ε (fat borders as wide as the new ε), instead of tessellating again.
 //!
@@ -30,7 +30,7 @@
 //! last few levels ([`LodOptions::cache_levels`]); going back to a cached level costs nothing.
 //!
 //! **Frame-rate target** (Pajon, after Funkhouser and Séquin's benefit/cost): see
-//! [`PixelErrorController`].
+//! `PixelErrorController`.
 
 pub mod bvh;
 mod shared;
@@ -46,7 +46,7 @@ use crate::tessellate::PatchMesh;
 use crate::view::View;
 
 /// Ratio between consecutive tessellation levels.
-pub const LEVEL_RATIO: f64 = std::f64::consts::SQRT_2;
+pub(crate) const LEVEL_RATIO: f64 = std::f64::consts::SQRT_2;
 
 use crate::tessellate::trimmed::REFINE_TARGET;
 
@@ -98,7 +98,7 @@ pub(crate) fn needs_update(current: f64, wanted: f64, coarsen_factor: f64) -> bo
 
 /// Tessellation levels of a scene: ε_k = unit · √2^k.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Levels {
+pub(crate) struct Levels {
     pub unit: f64,
 }
 
@@ -634,7 +634,7 @@ fn scene_key(scene: &Scene) -> (usize, usize) {
 /// fit finds no cost per triangle (b ≤ 0: the frame is fill- or overhead-bound), the finest
 /// pixel error is used: coarsening could not buy time.
 #[derive(Clone, Debug)]
-pub struct PixelErrorController {
+pub(crate) struct PixelErrorController {
     pub target: Duration,
     pub min: f64,
     pub max: f64,
@@ -648,6 +648,11 @@ pub struct PixelErrorController {
 }
 
 impl PixelErrorController {
+    #[cfg(test)]
+    pub(crate) fn pixel_error(&self) -> f64 {
+        self.pixel_error
+    }
+
     pub fn new(target: Duration, min: f64, max: f64) -> Self {
         PixelErrorController {
             target,
@@ -660,10 +665,6 @@ impl PixelErrorController {
             snn: 0.0,
             snt: 0.0,
         }
-    }
-
-    pub fn pixel_error(&self) -> f64 {
-        self.pixel_error
     }
 
     /// Records a frame (its triangles and time) and returns the pixel error for the next one.

@@ -32,14 +32,14 @@ use crate::mt::CutState;
 use crate::tessellate::{Instance, PatchMesh, Tessellators, instance_of, placed, shared_surface};
 
 /// Frames a shared tessellation is kept without being asked for.
-pub const KEEP_FRAMES: u64 = 16;
+pub(crate) const KEEP_FRAMES: u64 = 16;
 
 /// Jobs from which the placements are made on the rayon workers rather than in line.
 const PARALLEL_PLACEMENTS: usize = 4096;
 
 /// Bézier patches whose translated control points differ by at most this fraction of the
 /// model's diagonal share a tessellation.
-pub const TRANSLATION_TOLERANCE: f64 = 1e-9;
+pub(crate) const TRANSLATION_TOLERANCE: f64 = 1e-9;
 
 /// What placements share: a surface placed with a scale ([`shared_surface`]), or a class of
 /// Bézier patches equal up to translation.

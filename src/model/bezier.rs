@@ -1,4 +1,4 @@
-//! Tensor-product Bézier patches of any degree up to [`MAX_DEGREE`] in u and v.
+//! Tensor-product Bézier patches of any degree up to `MAX_DEGREE` in u and v.
 //!
 //! Evaluation in the Bernstein basis (built by the de Casteljau recurrence, stable up to degree
 //! 15) with first and second derivatives, and normals that stay finite at degenerate edges such as
@@ -12,12 +12,12 @@ use super::Sphere;
 use super::edges::EdgeKind;
 
 /// Highest degree accepted in u or v.
-pub const MAX_DEGREE: usize = 15;
+pub(crate) const MAX_DEGREE: usize = 15;
 
 /// Largest coordinate magnitude a model may have: ≈ √`f32::MAX`. The GPU draws in `f32`,
 /// where a squared length past ~1.8·10¹⁹ is infinite, and a model beyond it cannot be framed
 /// (its bounding box and the view's ε overflow). Real CAD data (millimetres) stays far below.
-pub const MAX_COORDINATE: f64 = 1e19;
+pub(crate) const MAX_COORDINATE: f64 = 1e19;
 
 /// Why a set of control points is not a valid patch.
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -68,7 +68,7 @@ pub struct BezierPatch {
 
 /// Position and derivatives of a surface at one parameter point.
 #[derive(Clone, Copy, Debug, Default)]
-pub struct SurfacePoint {
+pub(crate) struct SurfacePoint {
     pub p: DVec3,
     pub du: DVec3,
     pub dv: DVec3,
@@ -79,7 +79,7 @@ pub struct SurfacePoint {
 
 /// Bounds on the norms of the second derivatives over the whole patch.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct SecondDerivativeBounds {
+pub(crate) struct SecondDerivativeBounds {
     pub uu: f64,
     pub uv: f64,
     pub vv: f64,
@@ -156,7 +156,7 @@ impl BezierPatch {
     }
 
     /// This patch with its sides' kinds set (by the scene, which knows its neighbours).
-    pub fn with_sides(self, sides: [EdgeKind; 4]) -> Self {
+    pub(crate) fn with_sides(self, sides: [EdgeKind; 4]) -> Self {
         BezierPatch { sides, ..self }
     }
 
@@ -178,7 +178,7 @@ impl BezierPatch {
     }
 
     /// Position only.
-    pub fn eval(&self, u: f64, v: f64) -> DVec3 {
+    pub(crate) fn eval(&self, u: f64, v: f64) -> DVec3 {
         let mut bu = [0.0; MAX_DEGREE + 1];
         let mut bv = [0.0; MAX_DEGREE + 1];
         bernstein(self.du, u, &mut bu);
@@ -192,7 +192,7 @@ impl BezierPatch {
     }
 
     /// Position with first and second partial derivatives.
-    pub fn eval_derivs(&self, u: f64, v: f64) -> SurfacePoint {
+    pub(crate) fn eval_derivs(&self, u: f64, v: f64) -> SurfacePoint {
         let (u0, u1, u2) = basis_with_derivs(self.du, u);
         let (v0, v1, v2) = basis_with_derivs(self.dv, v);
         let mut s = SurfacePoint::default();
@@ -242,7 +242,7 @@ impl BezierPatch {
     /// Bounds on `|S_uu|`, `|S_uv|`, `|S_vv|` over `[0,1]²` from the control net's second
     /// differences (the derivative of a Bézier patch is a Bézier patch of the differences, and a
     /// Bézier patch lies in the convex hull of its control points).
-    pub fn second_derivative_bounds(&self) -> SecondDerivativeBounds {
+    pub(crate) fn second_derivative_bounds(&self) -> SecondDerivativeBounds {
         let (du, dv) = (self.du, self.dv);
         let mut b = SecondDerivativeBounds::default();
         if du >= 2 {
@@ -279,7 +279,7 @@ impl BezierPatch {
 
 /// All Bernstein polynomials `B_i^n(t)`, i = 0..=n, into `out[..=n]` (de Casteljau recurrence;
 /// exact 0/1 values at t = 0 and t = 1, so patch borders evaluate exactly on the border curve).
-pub fn bernstein(n: usize, t: f64, out: &mut [f64]) {
+pub(crate) fn bernstein(n: usize, t: f64, out: &mut [f64]) {
     let s = 1.0 - t;
     out[0] = 1.0;
     for k in 1..=n {

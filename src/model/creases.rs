@@ -1,6 +1,6 @@
 //! Vertex normals of a welded triangle mesh: the file's own where it gives them, else
 //! area-weighted normals that stay smooth across an edge only when its dihedral angle is at
-//! most [`CREASE_ANGLE_DEG`] (a hard edge keeps a normal per side, as a modeller's "auto
+//! most `CREASE_ANGLE_DEG` (a hard edge keeps a normal per side, as a modeller's "auto
 //! smooth" or OBJ smoothing groups would); then every position is split into one vertex per
 //! distinct normal (a *wedge*, Hoppe's term in "Progressive meshes", SIGGRAPH 1996 §3).
 //!
@@ -22,11 +22,11 @@ use glam::Vec3;
 /// Largest dihedral angle (between the normals of two faces sharing an edge) shaded smooth
 /// when the file gives no normals, in degrees. 40° keeps the facets of a cylinder tessellated
 /// at ≥ 9 segments smooth and the 90° edges of a box (or a 45° chamfer's) hard.
-pub const CREASE_ANGLE_DEG: f32 = 40.0;
+pub(crate) const CREASE_ANGLE_DEG: f32 = 40.0;
 
 /// Two normals at one position closer than this (degrees) are one vertex's: files that split
 /// vertices for texture coordinates write the same normal with rounding differences.
-pub const SAME_NORMAL_DEG: f32 = 1.0;
+pub(crate) const SAME_NORMAL_DEG: f32 = 1.0;
 
 /// Whether a face's normal can be trusted: its corners are not collinear up to f32 rounding
 /// (the angle test of [`crate::io::mesh::check_drawable`]).
@@ -55,7 +55,11 @@ fn union(parent: &mut [u32], a: u32, b: u32) {
 /// around the corner's vertex that are reachable from the corner's face across edges of at
 /// most `crease_deg` (unit length; zero where only faces without a reliable normal meet).
 /// `triangles` index `positions` with welded vertices (one index per position).
-pub fn creased_normals(positions: &[Vec3], triangles: &[[u32; 3]], crease_deg: f32) -> Vec<Vec3> {
+pub(crate) fn creased_normals(
+    positions: &[Vec3],
+    triangles: &[[u32; 3]],
+    crease_deg: f32,
+) -> Vec<Vec3> {
     let n = triangles.len();
     let face: Vec<Vec3> = triangles
         .iter()
@@ -133,7 +137,7 @@ pub fn creased_normals(positions: &[Vec3], triangles: &[[u32; 3]], crease_deg: f
 /// first group). Returns the triangles over the new vertices, each new vertex's position
 /// index and its normal. New vertices come position by position, so a mesh without creases
 /// keeps its vertex order; a position no triangle uses keeps one vertex (normal zero).
-pub fn wedges(
+pub(crate) fn wedges(
     positions: usize,
     triangles: &[[u32; 3]],
     corner_normals: &[Vec3],

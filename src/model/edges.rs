@@ -15,12 +15,12 @@
 //!   around a periodic surface: never drawn.
 //!
 //! Smoothness is decided once, at load, from the exact surfaces: along an edge shared by two
-//! faces, their unit normals at [`SAMPLES`] points of the edge (a quarter, half and three
-//! quarters along it) must agree within [`SMOOTH_ANGLE_DEG`] (1°) — as lines, since CAD faces
+//! faces, their unit normals at `SAMPLES` points of the edge (a quarter, half and three
+//! quarters along it) must agree within `SMOOTH_ANGLE_DEG` (1°) — as lines, since CAD faces
 //! are not consistently oriented. Trimmed faces (STEP): an edge is shared when the file
-//! shares its `EDGE_CURVE` ([`classify_shared`]; IGES faces share no edge entities, so all
+//! shares its `EDGE_CURVE` (`classify_shared`; IGES faces share no edge entities, so all
 //! their edges count as free and sharp). Bézier patches: a side is shared when another
-//! patch's side has the same control points, in either direction ([`bezier_sides`]). Meshes:
+//! patch's side has the same control points, in either direction (`bezier_sides`). Meshes:
 //! an edge used once in the wedge-split mesh is a crease or a boundary, an edge two triangles
 //! share a patch cut (`model::mesh::extract`).
 //!
@@ -39,7 +39,7 @@ use glam::DVec3;
 use super::bezier::BezierPatch;
 
 /// What a border segment runs along. The value's bits are the edge modes that draw it
-/// ([`EDGE_ALL`], [`EDGE_FEATURE`]).
+/// (`EDGE_ALL`, `EDGE_FEATURE`).
 #[repr(u8)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum EdgeKind {
@@ -53,23 +53,23 @@ pub enum EdgeKind {
 }
 
 /// Bit of an [`EdgeKind`]: drawn with `--edges all`.
-pub const EDGE_ALL: u8 = 1;
+pub(crate) const EDGE_ALL: u8 = 1;
 /// Bit of an [`EdgeKind`]: drawn with `--edges feature`.
-pub const EDGE_FEATURE: u8 = 2;
+pub(crate) const EDGE_FEATURE: u8 = 2;
 
 /// Largest angle between the normals of two faces along an edge that counts as smooth, in
 /// degrees.
-pub const SMOOTH_ANGLE_DEG: f64 = 1.0;
+pub(crate) const SMOOTH_ANGLE_DEG: f64 = 1.0;
 
 /// Where along an edge (fractions of its parameter range) the faces' normals are compared.
-pub const SAMPLES: [f64; 3] = [0.25, 0.5, 0.75];
+pub(crate) const SAMPLES: [f64; 3] = [0.25, 0.5, 0.75];
 
 /// Unit normals of one face at the [`SAMPLES`] of one of its edges; `None` where the
 /// surface has no normal (a pole) or the point could not be found on it.
-pub type EdgeNormals = [Option<DVec3>; SAMPLES.len()];
+pub(crate) type EdgeNormals = [Option<DVec3>; SAMPLES.len()];
 
 /// Whether two faces with `a` and `b` along their common edge meet smoothly: every sample
-/// has a normal on both sides, and they agree within [`SMOOTH_ANGLE_DEG`] as lines.
+/// has a normal on both sides, and they agree within `SMOOTH_ANGLE_DEG` as lines.
 pub fn smooth(a: &EdgeNormals, b: &EdgeNormals) -> bool {
     let cos = SMOOTH_ANGLE_DEG.to_radians().cos();
     a.iter().zip(b).all(|(x, y)| match (x, y) {
@@ -81,7 +81,7 @@ pub fn smooth(a: &EdgeNormals, b: &EdgeNormals) -> bool {
 /// One face's use of an edge: the edge's key (a STEP `EDGE_CURVE` id), the face (any index
 /// the caller keeps) and its normals along the edge.
 #[derive(Clone, Copy, Debug)]
-pub struct EdgeUse {
+pub(crate) struct EdgeUse {
     pub edge: u64,
     pub face: usize,
     pub normals: EdgeNormals,
@@ -90,7 +90,7 @@ pub struct EdgeUse {
 /// The kind of every use in `uses`, in order: an edge used by one face is free (sharp), by
 /// one face twice a seam (none), by two faces smooth or sharp by their normals
 /// ([`smooth`]), by more faces sharp (non-manifold).
-pub fn classify_shared(uses: &[EdgeUse]) -> Vec<EdgeKind> {
+pub(crate) fn classify_shared(uses: &[EdgeUse]) -> Vec<EdgeKind> {
     let mut by_edge: std::collections::HashMap<u64, Vec<usize>> = Default::default();
     for (i, u) in uses.iter().enumerate() {
         by_edge.entry(u.edge).or_default().push(i);
@@ -136,7 +136,7 @@ fn side(p: &BezierPatch, s: usize) -> (Vec<DVec3>, impl Fn(f64) -> (f64, f64)) {
 /// 0, v = 1, u = 1, v = 0): a side collapsed to a point (a pole) is none; a side whose
 /// control points another side repeats (in either direction) is smooth or sharp by the two
 /// patches' normals at [`SAMPLES`]; a side no other side repeats is free (sharp).
-pub fn bezier_sides(patches: &[BezierPatch]) -> Vec<[EdgeKind; 4]> {
+pub(crate) fn bezier_sides(patches: &[BezierPatch]) -> Vec<[EdgeKind; 4]> {
     // Each side (patch, side, run forwards) by the bits of its control points, in the
     // smaller of its two directions.
     type Sides = Vec<(usize, usize, bool)>;

@@ -9,7 +9,7 @@
 //! derivative of a rational surface came out exactly zero, which the tessellator took for a
 //! pole, and the seam of the spring was torn open (1 506 ε on `gen-1-14`, 245 757 triangles).
 //!
-//! [`clamp_surface`] and [`clamp_curve`] return the same spline with clamped knot vectors
+//! `clamp_surface` and `clamp_curve` return the same spline with clamped knot vectors
 //! (the end knots repeated p + 1 times): a knot at t_p is inserted until it has multiplicity
 //! p, the control points whose basis functions vanish on the range are dropped, and the one
 //! knot left before the run is set to t_p (on the range no basis function depends on it).
@@ -27,7 +27,7 @@ use super::trimmed::{Curve3D, TruckSurface};
 
 /// The same surface with clamped knot vectors, `None` when they already are (or the surface
 /// is not a B-spline).
-pub fn clamp_surface(s: &TruckSurface) -> Option<TruckSurface> {
+pub(crate) fn clamp_surface(s: &TruckSurface) -> Option<TruckSurface> {
     match s {
         TruckSurface::BSplineSurface(b) => {
             let grid = b
@@ -58,7 +58,7 @@ pub fn clamp_surface(s: &TruckSurface) -> Option<TruckSurface> {
 
 /// The same curve with a clamped knot vector, `None` when it already is (or the curve is not
 /// a B-spline).
-pub fn clamp_curve(c: &Curve3D) -> Option<Curve3D> {
+pub(crate) fn clamp_curve(c: &Curve3D) -> Option<Curve3D> {
     match c {
         Curve3D::BSplineCurve(b) => {
             let pts: Vec<DVec4> = b

@@ -53,7 +53,7 @@ pub struct TriGroup {
 impl TriMesh {
     /// The group of every triangle (all 0 without groups; triangles past the last group's end
     /// belong to the last group).
-    pub fn triangle_groups(&self) -> Vec<u32> {
+    pub(crate) fn triangle_groups(&self) -> Vec<u32> {
         let mut out = vec![0u32; self.triangles.len()];
         let mut start = 0;
         for (g, group) in self.groups.iter().enumerate() {
@@ -74,16 +74,16 @@ impl TriMesh {
     }
 
     /// The position index of vertex `v` ([`TriMesh::position_ids`]).
-    pub fn position_id(&self, v: u32) -> u32 {
+    pub(crate) fn position_id(&self, v: u32) -> u32 {
         self.position_ids.get(v as usize).copied().unwrap_or(v)
     }
 
     /// Merges vertices at bit-identical positions (glTF splits vertices by normal and texture
     /// coordinate), drops triangles that become degenerate (two equal corners), gives every
     /// corner a normal — the file's ([`TriMesh::normals`]) where it has one, else the
-    /// area-weighted normal of the faces around it within [`creases::CREASE_ANGLE_DEG`]
-    /// ([`creases::creased_normals`]) — and splits each position into one vertex per distinct
-    /// normal ([`creases::wedges`]; [`TriMesh::position_ids`] says which vertices share a
+    /// area-weighted normal of the faces around it within `creases::CREASE_ANGLE_DEG`
+    /// (`creases::creased_normals`) — and splits each position into one vertex per distinct
+    /// normal (`creases::wedges`; [`TriMesh::position_ids`] says which vertices share a
     /// position). Without creases or split normals the vertices are the distinct positions in
     /// the order they first occur. Returns how many triangles were dropped.
     pub fn weld(&mut self) -> usize {
@@ -190,7 +190,7 @@ pub(crate) fn edge(a: u32, b: u32) -> (u32, u32) {
 }
 
 /// Area-weighted vertex normals of `mesh` (zero for unused vertices).
-pub fn vertex_normals(mesh: &TriMesh) -> Vec<Vec3> {
+pub(crate) fn vertex_normals(mesh: &TriMesh) -> Vec<Vec3> {
     let mut normals = vec![Vec3::ZERO; mesh.positions.len()];
     for t in &mesh.triangles {
         let [a, b, c] = t.map(|i| mesh.positions[i as usize]);

@@ -17,8 +17,7 @@ pub mod trimmed;
 
 use std::sync::Arc;
 
-pub use bezier::{BezierPatch, MAX_DEGREE};
-pub use memory::SceneMemory;
+pub use bezier::BezierPatch;
 pub use trimmed::TrimmedFace;
 
 use glam::{DMat4, DVec3};
@@ -117,7 +116,7 @@ impl Patch {
 }
 
 /// Largest factor by which `m` stretches a length.
-pub fn transform_scale(m: &DMat4) -> f64 {
+pub(crate) fn transform_scale(m: &DMat4) -> f64 {
     m.x_axis
         .truncate()
         .length()
@@ -194,7 +193,7 @@ pub struct Scene {
 impl Scene {
     /// Builds a scene from Bézier surfaces, numbering the patches in order.
     /// Sides that another patch repeats are classified as smooth or sharp edges
-    /// ([`edges::bezier_sides`]).
+    /// (`edges::bezier_sides`).
     pub fn from_bezier(surfaces: Vec<BezierPatch>, up: UpAxis) -> Scene {
         let sides = edges::bezier_sides(&surfaces);
         let surfaces: Vec<BezierPatch> = surfaces
@@ -225,7 +224,7 @@ impl Scene {
     }
 
     /// A scene of one unnamed part, its bounds from the patches'.
-    pub fn single_part(
+    pub(crate) fn single_part(
         patches: Vec<Patch>,
         up: UpAxis,
         bbox: (DVec3, DVec3),

@@ -7,14 +7,14 @@
 //! A surface of an offset (`OFFSET_SURFACE` of a B-spline) is evaluated here too: the base point
 //! moved along the unit normal, whose derivatives come from the base's second derivatives.
 //!
-//! Degrees up to [`MAX_DEGREE`] and clamped knot vectors (`model::knots` clamps on reading);
+//! Degrees up to `MAX_DEGREE` and clamped knot vectors (`model::knots` clamps on reading);
 //! anything else stays with truck (`NurbsSurface::of` returns `None`).
 
 use super::trimmed::TruckSurface;
 use glam::{DVec2, DVec3, DVec4};
 
 /// Highest degree evaluated here (STEP allows any; OCCT's own limit is 25).
-pub const MAX_DEGREE: usize = 25;
+pub(crate) const MAX_DEGREE: usize = 25;
 const M: usize = MAX_DEGREE + 1;
 
 /// A B-spline or NURBS surface: `S(u, v) = Σ N_i(u) N_j(v) w_ij P_ij / Σ N_i(u) N_j(v) w_ij`.
@@ -30,7 +30,7 @@ pub struct NurbsSurface {
 }
 
 /// What a surface evaluation gives: `[S, S_u, S_v, S_uu, S_uv, S_vv]` up to the order asked.
-pub type Derivs = [DVec3; 6];
+pub(crate) type Derivs = [DVec3; 6];
 
 /// A surface we evaluate ourselves.
 #[derive(Clone, Debug, PartialEq)]
@@ -52,7 +52,7 @@ pub enum FastSurface {
 impl FastSurface {
     /// Bytes behind this value (knot vectors and control points; a truck base's own heap
     /// is not counted, as a face's truck surface is not).
-    pub fn heap_bytes(&self) -> usize {
+    pub(crate) fn heap_bytes(&self) -> usize {
         match self {
             FastSurface::Nurbs(n) | FastSurface::Offset { base: n, .. } => {
                 (n.knots.0.capacity() + n.knots.1.capacity()) * size_of::<f64>()
@@ -63,7 +63,7 @@ impl FastSurface {
     }
 
     /// Point, first and (for `order` 2) second derivatives.
-    pub fn eval(&self, uv: DVec2, order: usize) -> Derivs {
+    pub(crate) fn eval(&self, uv: DVec2, order: usize) -> Derivs {
         match self {
             FastSurface::Nurbs(n) => n.eval(uv, order),
             FastSurface::Offset { base, distance } => {
@@ -78,7 +78,7 @@ impl FastSurface {
 
 impl NurbsSurface {
     /// Truck's B-spline or NURBS surface in our form; `None` for other surfaces, degrees above
-    /// [`MAX_DEGREE`] and knot vectors that are not clamped.
+    /// `MAX_DEGREE` and knot vectors that are not clamped.
     pub fn of(s: &TruckSurface) -> Option<NurbsSurface> {
         let (knots, rows, rational): (_, Vec<Vec<DVec4>>, bool) = match s {
             TruckSurface::BSplineSurface(b) => {
@@ -130,7 +130,7 @@ impl NurbsSurface {
 
     /// Point, first and (for `order` 2) second derivatives at `uv` (outside the knot range
     /// the end spans' polynomials, as truck extrapolates).
-    pub fn eval(&self, uv: DVec2, order: usize) -> Derivs {
+    pub(crate) fn eval(&self, uv: DVec2, order: usize) -> Derivs {
         let (pu, pv) = self.degree;
         let (bu, su) = basis(&self.knots.0, pu, self.count.0, uv.x, order);
         let (bv, sv) = basis(&self.knots.1, pv, self.count.1, uv.y, order);

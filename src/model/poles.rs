@@ -5,7 +5,7 @@
 //! A trim loop that runs into a pole has a well-defined 3D polyline but no well-defined
 //! parameter there: the free parameter of the pole point is whatever the projection left. In
 //! parameter space the loop has to run *along* the pole line, from the free parameter it came
-//! in with to the one it leaves with; [`expand_poles`] replaces every pole point by that
+//! in with to the one it leaves with; `expand_poles` replaces every pole point by that
 //! segment:
 //! - **which way** — along a periodic free direction the two ends are only known modulo the
 //!   period; the segment runs so that the face lies on its left (or right, when the face's
@@ -35,7 +35,7 @@ use super::trimmed::{Interval, SurfaceEval, TrimmedFace, parameter_bounds};
 
 /// Below this fraction of a face's typical speed, a parameter derivative counts as vanished:
 /// the point is a pole ([`TrimmedFace::pole_at`]).
-pub const POLE_SPEED: f64 = 1e-6;
+pub(crate) const POLE_SPEED: f64 = 1e-6;
 
 /// Fraction of a period under which the two ends of a pole segment count as the same
 /// parameter (the loop goes once around the pole).
@@ -50,7 +50,7 @@ pub struct Pole {
 }
 
 /// A point of a loop in parameter space, as [`expand_poles`] needs it.
-pub trait LoopPoint: Copy {
+pub(crate) trait LoopPoint: Copy {
     fn uv(&self) -> DVec2;
     fn with_uv(self, uv: DVec2) -> Self;
     /// This point, as the start of a segment that runs along a pole line (to the next point).
@@ -63,7 +63,7 @@ impl TrimmedFace {
     /// The pole through `uv`, if the surface collapses to a point along one parameter there:
     /// the derivative along that parameter is below [`POLE_SPEED`] × `speed` (a typical speed
     /// of the face).
-    pub fn pole_at(&self, uv: DVec2, speed: f64) -> Option<Pole> {
+    pub(crate) fn pole_at(&self, uv: DVec2, speed: f64) -> Option<Pole> {
         let (su, sv) = self.derivs(uv);
         let (lu, lv) = (su.length(), sv.length());
         let tiny = POLE_SPEED * speed;
@@ -190,7 +190,7 @@ fn unwrap_near(mut uv: DVec2, near: DVec2, (pu, pv): (Option<f64>, Option<f64>))
 /// Whether a closed loop (first point not repeated, each point unwrapped next to the one
 /// before) runs around a periodic direction: its last point lies a whole period or more from
 /// its first.
-pub fn winds(face: &TrimmedFace, lp: &[impl LoopPoint]) -> bool {
+pub(crate) fn winds(face: &TrimmedFace, lp: &[impl LoopPoint]) -> bool {
     let (Some(first), Some(last)) = (lp.first(), lp.last()) else {
         return false;
     };
@@ -205,7 +205,7 @@ pub fn winds(face: &TrimmedFace, lp: &[impl LoopPoint]) -> bool {
 /// and shifting what follows by whole periods so that the segment spans the face's opening at
 /// the pole (see the module doc). The loop may come out rotated (it starts at a point that is
 /// not a pole). Returns whether it passed through a pole.
-pub fn expand_poles<T: LoopPoint>(face: &TrimmedFace, lp: &mut Vec<T>) -> bool {
+pub(crate) fn expand_poles<T: LoopPoint>(face: &TrimmedFace, lp: &mut Vec<T>) -> bool {
     let n = lp.len();
     if n < 2 {
         return false;

@@ -9,7 +9,7 @@
 use super::{Instance, Scene, Sphere};
 
 /// Whether `pattern` (with `*` and `?`) matches the whole of `text`.
-pub fn glob(pattern: &str, text: &str) -> bool {
+pub(crate) fn glob(pattern: &str, text: &str) -> bool {
     let (p, t): (Vec<char>, Vec<char>) = (pattern.chars().collect(), text.chars().collect());
     // Iterative matching with one backtrack point for the last `*`.
     let (mut i, mut j) = (0, 0);

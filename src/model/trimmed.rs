@@ -130,7 +130,7 @@ impl TrimEdge {
     }
 
     /// Whether the edge starts and ends at the same point.
-    pub fn is_closed(&self) -> bool {
+    pub(crate) fn is_closed(&self) -> bool {
         self.start == self.end
     }
 }
@@ -220,7 +220,7 @@ fn newton_nearest(curve: &Curve3D, p: DVec3, mut t: f64) -> f64 {
 /// heal an edge whose vertex lies off it: the nearest of 129 samples over the curve's range
 /// (one period of a periodic curve), refined by Newton inside the range; on an unbounded
 /// curve (a line), Newton from the start. `None` when it is not finite.
-pub fn nearest_on_curve(curve: &Curve3D, p: DVec3) -> Option<DVec3> {
+pub(crate) fn nearest_on_curve(curve: &Curve3D, p: DVec3) -> Option<DVec3> {
     let curve = super::knots::clamp_curve(curve).unwrap_or_else(|| curve.clone());
     let range = curve_range(&curve)
         .filter(|(a, b)| a.is_finite() && b.is_finite())
@@ -259,7 +259,7 @@ pub struct LoopEdge {
 
 /// Points along boundary loops that bound them: every edge's ends and parameter midpoint
 /// (what a reader's first [`TrimmedFace::bounds`] is made from).
-pub fn loop_points(loops: &[Vec<LoopEdge>]) -> Vec<DVec3> {
+pub(crate) fn loop_points(loops: &[Vec<LoopEdge>]) -> Vec<DVec3> {
     loops
         .iter()
         .flatten()
@@ -296,13 +296,13 @@ pub struct TrimmedFace {
     /// The surface as we evaluate it ourselves (`model::nurbs`: B-splines without truck's
     /// allocations, offsets of B-splines truck has no type for), when it is one; every
     /// evaluation of the face goes through it. Made from `surface` by
-    /// [`TrimmedFace::fast_surface`]; replace both together.
+    /// `TrimmedFace::fast_surface`; replace both together.
     pub fast: Option<Arc<FastSurface>>,
 }
 
 impl TrimmedFace {
     /// Our evaluation of `surface` when it is a B-spline we take (see [`TrimmedFace::fast`]).
-    pub fn fast_surface(surface: &TruckSurface) -> Option<Arc<FastSurface>> {
+    pub(crate) fn fast_surface(surface: &TruckSurface) -> Option<Arc<FastSurface>> {
         NurbsSurface::of(surface).map(|n| Arc::new(FastSurface::Nurbs(n)))
     }
 
@@ -326,7 +326,7 @@ impl TrimmedFace {
 
     /// Detects directions in which `surface` closes on itself (see [`TrimmedFace::closed`]),
     /// to relative tolerance `tol` of its size.
-    pub fn closed_directions(surface: &TruckSurface, tol: f64) -> (Interval, Interval) {
+    pub(crate) fn closed_directions(surface: &TruckSurface, tol: f64) -> (Interval, Interval) {
         let (ru, rv) = parameter_bounds(surface);
         let (pu, pv) = (surface.u_period(), surface.v_period());
         let (Some((u0, u1)), Some((v0, v1))) = (ru, rv) else {
@@ -677,7 +677,7 @@ impl SurfaceEval for TruckSurface {
 /// share `id + 1` where u closes on itself, sides 0 and 2 share `id` where v does: a seam is
 /// one edge used twice). Bounds an untrimmed IGES surface, and a STEP face whose only bound
 /// is a `VERTEX_LOOP` (a whole sphere).
-pub fn parameter_rectangle(
+pub(crate) fn parameter_rectangle(
     surface: &TruckSurface,
     (u0, u1, v0, v1): (f64, f64, f64, f64),
     seams: (bool, bool),
@@ -712,10 +712,10 @@ pub fn parameter_rectangle(
 }
 
 /// A finite parameter interval, `None` when unbounded.
-pub type Interval = Option<(f64, f64)>;
+pub(crate) type Interval = Option<(f64, f64)>;
 
 /// The finite parameter range of a surface, per direction.
-pub fn parameter_bounds(s: &TruckSurface) -> (Interval, Interval) {
+pub(crate) fn parameter_bounds(s: &TruckSurface) -> (Interval, Interval) {
     use truck_stepio::r#in::alias::SweptCurve;
     let (mut u, mut v) = s.try_range_tuple();
     // B-splines (and surfaces swept from them) end at their clamped knots (see `curve_range`).
@@ -749,7 +749,7 @@ pub fn parameter_bounds(s: &TruckSurface) -> (Interval, Interval) {
 /// revolution past the pole where its profile meets the axis); `None` for analytic
 /// surfaces and lines, whose reported range is nominal (truck gives a cone, a plane or a
 /// line `0..1`, an extrusion `0..1` along its vector).
-pub fn knot_bounds(s: &TruckSurface) -> (Interval, Interval) {
+pub(crate) fn knot_bounds(s: &TruckSurface) -> (Interval, Interval) {
     use truck_stepio::r#in::alias::SweptCurve;
     let bspline = |c: &Curve3D| matches!(c, Curve3D::BSplineCurve(_) | Curve3D::NurbsCurve(_));
     let (ru, rv) = parameter_bounds(s);

@@ -130,7 +130,7 @@ pub fn load(path: &Path) -> Result<Scene, LoadError> {
 }
 
 /// As [`load`], reporting long steps to `progress`.
-pub fn load_with(path: &Path, progress: &dyn Progress) -> Result<Scene, LoadError> {
+pub(crate) fn load_with(path: &Path, progress: &dyn Progress) -> Result<Scene, LoadError> {
     let mut scene = prepare(crate::io::read_with(path, progress)?, progress)?;
     scene.unit = scene.unit.or(crate::io::stated_unit(path));
     Ok(scene)

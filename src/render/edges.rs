@@ -2,7 +2,7 @@
 //! borders are expanded from (`vs_edge` in `shaders/scene.wgsl`), so they follow the frame's
 //! level of detail and need no geometry of their own. Each border point carries, in its
 //! colour's alpha byte, the edge bits of its segment to the next point
-//! ([`super::fat_border::edge_bits`], from `PatchMesh::border_kinds`); a draw selects the
+//! (`super::fat_border::edge_bits`, from `PatchMesh::border_kinds`); a draw selects the
 //! segments whose bits meet its [`Edges`] mode. [`segments`] is the CPU twin of that choice.
 //!
 //! Depth: a line lies on its own patch's triangles, and a neighbour's may be up to its ε in

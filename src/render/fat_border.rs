@@ -22,7 +22,7 @@
 //! reaches nothing farther than ε from v_i; the previous quad's edge v_i3–v_i6 runs inside
 //! the two fans.
 //!
-//! **Straight joints** (the polyline turns by less than 8°, [`STRAIGHT_COS`]): v_i1, v_i2, v_i3
+//! **Straight joints** (the polyline turns by less than 8°, `STRAIGHT_COS`): v_i1, v_i2, v_i3
 //! (and v_i4, v_i5, v_i6) all become the mitre point `ε·normalize(t_i × d_i) / cos(θ/2)`. The band
 //! is then at least ε wide perpendicular to both segments and covers the fan's round wedge (the
 //! mitre contains it), the displaced vertices move by under 0.4 % of ε, and the fans have zero
@@ -158,7 +158,7 @@ fn is_fan(tri: &[u32]) -> bool {
 const TINY: f32 = 1e-12;
 /// Joints where consecutive segments turn by less than acos(0.99) ≈ 8.1° are straight (see the
 /// module doc).
-pub const STRAIGHT_COS: f32 = 0.99;
+pub(crate) const STRAIGHT_COS: f32 = 0.99;
 /// Flag in a slot code (bit 3): the border vertex's joint is straight (`FB_STRAIGHT` in WGSL).
 pub const STRAIGHT_FLAG: u32 = 8;
 /// Flag in a slot code (bit 10): the 2-vertex variant's draw, whose v_i2 and v_i5 sit at the
@@ -166,7 +166,7 @@ pub const STRAIGHT_FLAG: u32 = 8;
 pub const MITRE_FLAG: u32 = 1 << 10;
 /// Longest mitre of the 2-vertex variant, in half-widths: joints turning by up to
 /// 2·acos(1 / `MITRE_LIMIT`) ≈ 137° get the whole mitre, sharper ones this much.
-pub const MITRE_LIMIT: f32 = 2.75;
+pub(crate) const MITRE_LIMIT: f32 = 2.75;
 
 fn normalize_or(v: Vec3, fallback: Vec3) -> Vec3 {
     let l2 = v.dot(v);
@@ -195,7 +195,7 @@ fn segment_dirs(prev: Vec3, cur: Vec3, next: Vec3) -> (Vec3, Vec3) {
     (s_prev, s_next)
 }
 
-/// Whether the border turns by less than acos([`STRAIGHT_COS`]) at `cur`.
+/// Whether the border turns by less than acos(`STRAIGHT_COS`) at `cur`.
 pub fn is_straight(prev: Vec3, cur: Vec3, next: Vec3) -> bool {
     let (s_prev, s_next) = segment_dirs(prev, cur, next);
     s_prev.dot(s_next) > STRAIGHT_COS
@@ -272,10 +272,10 @@ pub fn expand(prev: Vec3, cur: Vec3, next: Vec3, viewer: Vec4, eps: f32, code: u
 /// 4-6 sit at the mitre points, so its fans have zero area), the point opens its ring,
 /// closes its ring, is the ring's closing point (a copy of its first point, see
 /// [`BorderGeometry`]); the half-width in [`WIDTH_MASK`]; the ring's length − 1 above
-/// [`RING_SHIFT`] (the neighbours of a ring's ends wrap around).
+/// `RING_SHIFT` (the neighbours of a ring's ends wrap around).
 pub const INFO_STRAIGHT: u32 = 1;
-pub const INFO_FIRST: u32 = 2;
-pub const INFO_LAST: u32 = 4;
+pub(crate) const INFO_FIRST: u32 = 2;
+pub(crate) const INFO_LAST: u32 = 4;
 pub const INFO_CLOSING: u32 = 8;
 /// Bits 4..9 of [`BorderPoint::info`] and of an [`expand`] code: the fat border's half-width
 /// across the view as q / 63 of ε (q = 0: ε), see `width_bits`.
@@ -283,10 +283,10 @@ pub const WIDTH_SHIFT: u32 = 4;
 pub const WIDTH_MASK: u32 = 63 << WIDTH_SHIFT;
 /// The ring's length − 1 sits above this bit: rings of up to 2²² points (a ring that long
 /// holds 160 MiB of points, more than a storage binding: `RenderError::TooLarge` first).
-pub const RING_SHIFT: u32 = 10;
+pub(crate) const RING_SHIFT: u32 = 10;
 /// Longest ring a [`BorderPoint`] can name (its length − 1 fills the bits above
 /// [`RING_SHIFT`]); a longer one is refused by the renderer as too large.
-pub const MAX_RING_POINTS: usize = 1 << (32 - RING_SHIFT);
+pub(crate) const MAX_RING_POINTS: usize = 1 << (32 - RING_SHIFT);
 
 /// One border vertex v_i as the GPU stores it (40 bytes, read from a storage buffer by
 /// `vs_border`): its position, its patch's ε, its normal, where it sits on its ring, and
@@ -298,22 +298,22 @@ pub struct BorderPoint {
     pub cur: [f32; 3],
     pub eps: f32,
     pub normal: [f32; 3],
-    /// [`INFO_STRAIGHT`] | [`INFO_FIRST`] | [`INFO_LAST`] | [`INFO_CLOSING`] | half-width
-    /// ([`WIDTH_MASK`]) | (ring length − 1) << [`RING_SHIFT`].
+    /// [`INFO_STRAIGHT`] | `INFO_FIRST` | `INFO_LAST` | [`INFO_CLOSING`] | half-width
+    /// ([`WIDTH_MASK`]) | (ring length − 1) << `RING_SHIFT`.
     pub info: u32,
     pub patch_id: u32,
     /// The patch colour, packed (see `PatchMesh::color`); the alpha byte's two low bits are
     /// the edge modes that draw the segment from this point to the next (what it runs
-    /// along, `model::edges::EdgeKind`: [`edge_bits`]), the rest of it says whether the
+    /// along, `model::edges::EdgeKind`: `edge_bits`), the rest of it says whether the
     /// colour is the patch's own (≥ 128) or the default (< 128).
     pub color: [u8; 4],
 }
 
 /// Mask of the edge bits in the alpha byte of [`BorderPoint::color`].
-pub const EDGE_BITS: u8 = crate::model::edges::EDGE_ALL | crate::model::edges::EDGE_FEATURE;
+pub(crate) const EDGE_BITS: u8 = crate::model::edges::EDGE_ALL | crate::model::edges::EDGE_FEATURE;
 
 /// The packed colour `color` of a border point whose segment to the next runs along `kind`.
-pub fn edge_bits(color: [u8; 4], kind: crate::model::edges::EdgeKind) -> [u8; 4] {
+pub(crate) fn edge_bits(color: [u8; 4], kind: crate::model::edges::EdgeKind) -> [u8; 4] {
     let [r, g, b, a] = color;
     [r, g, b, (a & !EDGE_BITS) | kind as u8]
 }
@@ -482,7 +482,7 @@ pub fn position_placed(
 #[derive(Clone, Debug, Default)]
 pub struct BorderGeometry {
     pub points: Vec<BorderPoint>,
-    /// Points of the longest ring appended (≤ [`MAX_RING_POINTS`] to be drawable).
+    /// Points of the longest ring appended (≤ `MAX_RING_POINTS` to be drawable).
     pub longest_ring: usize,
 }
 
@@ -509,7 +509,7 @@ impl BorderGeometry {
     }
 
     /// Appends the border points of `m` (an instance's: of its world-space copy).
-    pub fn append(&mut self, m: &PatchMesh) {
+    pub(crate) fn append(&mut self, m: &PatchMesh) {
         let world = m.world();
         let m = world.as_ref();
         let eps = m.eps_border() as f32;

@@ -87,7 +87,7 @@ pub enum Edges {
 
 impl Edges {
     /// Every choice, as the CLI spells it.
-    pub const NAMES: &'static str = "off, feature or all";
+    pub(crate) const NAMES: &'static str = "off, feature or all";
 
     pub fn name(self) -> &'static str {
         match self {
@@ -97,7 +97,7 @@ impl Edges {
         }
     }
 
-    /// The edge bits ([`crate::model::edges::EDGE_ALL`], `EDGE_FEATURE`) a segment needs
+    /// The edge bits (`crate::model::edges::EDGE_ALL`, `EDGE_FEATURE`) a segment needs
     /// to be drawn in this mode (0: none is).
     pub fn bits(self) -> u8 {
         match self {
@@ -153,7 +153,7 @@ pub enum Primitives {
 
 impl Primitives {
     /// Every choice, as the CLI spells it.
-    pub const NAMES: &'static str = "auto, list, strips, mts or repair";
+    pub(crate) const NAMES: &'static str = "auto, list, strips, mts or repair";
 
     /// Whether `m` is drawn as triangle strips.
     pub(crate) fn strips_for(self, m: &PatchMesh) -> bool {
@@ -217,7 +217,7 @@ fn draw_edges(pass: &mut wgpu::RenderPass<'_>, start: u32, count: u32, instances
 }
 
 /// Default background (RGB, 0–255).
-pub const DEFAULT_BACKGROUND: [u8; 3] = [255, 255, 255];
+pub(crate) const DEFAULT_BACKGROUND: [u8; 3] = [255, 255, 255];
 /// Default surface colour for `lit` shading (RGB, 0–1).
 pub const DEFAULT_SURFACE_COLOR: [f32; 3] = [0.74, 0.77, 0.83];
 
@@ -384,7 +384,7 @@ impl Renderer {
         Self::with_gpu(Gpu::new()?)
     }
 
-    pub fn with_gpu(gpu: Gpu) -> Result<Renderer, RenderError> {
+    pub(crate) fn with_gpu(gpu: Gpu) -> Result<Renderer, RenderError> {
         let device = &gpu.device;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {

@@ -112,7 +112,7 @@ pub enum PickError {
 
 /// The ray through pixel position `(x, y)` (pixels, y down; a pixel's centre is at
 /// `+ 0.5`): a point on it and its unit direction, away from the viewer.
-pub fn pixel_ray(view: &View, x: f64, y: f64) -> (DVec3, DVec3) {
+pub(crate) fn pixel_ray(view: &View, x: f64, y: f64) -> (DVec3, DVec3) {
     let inverse = (view.proj_matrix() * view.view_matrix()).inverse();
     let ndc = (
         2.0 * x / view.width as f64 - 1.0,
@@ -144,7 +144,7 @@ fn ray_triangle(origin: DVec3, dir: DVec3, tri: [DVec3; 3]) -> Option<f64> {
 }
 
 /// The nearest point where the ray hits `mesh`'s triangles (world space).
-pub fn ray_cast(mesh: &PatchMesh, origin: DVec3, dir: DVec3) -> Option<DVec3> {
+pub(crate) fn ray_cast(mesh: &PatchMesh, origin: DVec3, dir: DVec3) -> Option<DVec3> {
     let world = mesh.world();
     let m = world.as_ref();
     m.triangles
@@ -196,7 +196,7 @@ pub fn pick(
 /// shows; `None` for the background, a pixel outside the image or a frame without IDs. The
 /// point: on the patch's triangles; else from the frame's depth image when it has one; else
 /// the patch's vertex nearest to the ray.
-pub fn hit_at<'a>(
+pub(crate) fn hit_at<'a>(
     frame: &super::Frame,
     view: &View,
     meshes: impl IntoIterator<Item = &'a PatchMesh>,

@@ -9,7 +9,7 @@
 //!
 //! **Design.** Four streams (surface vertices, surface list indices, strip indices, fat-border
 //! points — one [`super::BorderPoint`] per border vertex, expanded in the vertex shader), each
-//! a `pool::Pool`: one `wgpu::Buffer` suballocated by an [`Allocator`] (first fit over a
+//! a `pool::Pool`: one `wgpu::Buffer` suballocated by an `Allocator` (first fit over a
 //! coalesced free list). The four pools form an **arena**; a patch's streams all live in one
 //! arena (its indices refer to that arena's vertices). A pool that runs out of free units
 //! grows by reallocation: a new buffer at least 1.5× larger, the old contents copied on the
@@ -27,7 +27,7 @@
 //! walks the patches in the frustum only when the frame loop's generation changed; a patch
 //! whose mesh is the one its slot holds uploads nothing. The changed ones are built on the
 //! CPU in parallel (rayon: surface vertices, list indices or strips, the [`BorderGeometry`]
-//! of that one patch), [`BATCH`] patches at a time so the CPU copies stay bounded, their old
+//! of that one patch), `BATCH` patches at a time so the CPU copies stay bounded, their old
 //! ranges freed, new ones allocated and written: the contiguous ranges of one pool in one
 //! `write_buffer`; the CPU copies are dropped once written. Patches leaving the frustum stay
 //! resident (at most one tessellation per patch, as the frame loop keeps on the CPU).
@@ -63,8 +63,7 @@ mod draws;
 mod instances;
 mod pool;
 
-pub use alloc::{Allocator, Move};
-pub use instances::InstanceRecord;
+pub(crate) use alloc::Allocator;
 
 use std::collections::HashMap;
 
@@ -87,7 +86,7 @@ const DRAWN_STREAMS: [usize; 3] = [LIST, STRIPS, POINTS];
 
 /// Patches built on the CPU at a time: their copies are written and dropped before the next
 /// batch is built.
-pub const BATCH: usize = 4096;
+pub(crate) const BATCH: usize = 4096;
 
 /// What one [`ResidentGeometry::update`] did. Every byte given to `write_buffer` is counted
 /// in exactly one field of [`UploadStats::uploaded_bytes`]; GPU-side copies are not uploads.
@@ -145,10 +144,6 @@ pub struct ResidentMemory {
 }
 
 impl ResidentMemory {
-    pub fn capacity_total(&self) -> u64 {
-        self.capacity.iter().sum::<u64>() + self.records_capacity
-    }
-
     /// Bytes in live ranges and records.
     pub(crate) fn used_total(&self) -> u64 {
         self.used.iter().sum::<u64>() + self.records_used

@@ -13,7 +13,7 @@
 //! solid faces away from the viewer (n·v < 0 for its outward normal n), the viewer looks into
 //! the solid through the cut, and the pixel shows the cap. Its colour is the part's, shaded
 //! with the normal of the plane the ray entered through (flat: one normal per plane), and its
-//! linear depth (`fs_depth`) is where the ray meets that plane ([`Sections::cap_point`] is the
+//! linear depth (`fs_depth`) is where the ray meets that plane (`Sections::cap_point` is the
 //! CPU twin). The hardware depth stays the back face's own, so visibility between parts is
 //! decided by real surfaces and a back face hidden behind a front face never claims the cap.
 //!
@@ -164,7 +164,13 @@ impl Sections {
     /// (direction `dir`, from the viewer: the eye at `at − dir` under a perspective, from
     /// infinitely far under an orthographic projection) last entered the kept region through a
     /// plane, and that plane's index; `None` when it entered through none.
-    pub fn cap_point(&self, at: DVec3, dir: DVec3, perspective: bool) -> Option<(DVec3, usize)> {
+    #[cfg(test)]
+    pub(crate) fn cap_point(
+        &self,
+        at: DVec3,
+        dir: DVec3,
+        perspective: bool,
+    ) -> Option<(DVec3, usize)> {
         let mut best: Option<(f64, usize)> = None;
         for (i, p) in self.planes.iter().enumerate() {
             let Some(p) = p else { continue };

@@ -1,10 +1,10 @@
 //! WGSL sources, composed from the files in `shaders/` (WGSL has no `#include`).
 
 /// The fat-border expansion functions shared by the render shader and the compute twin.
-pub const FAT_BORDER_LIB: &str = include_str!("../../shaders/fat_border_lib.wgsl");
+pub(crate) const FAT_BORDER_LIB: &str = include_str!("../../shaders/fat_border_lib.wgsl");
 
 /// Surfaces + fat borders (vertex) and colour / linear-depth (fragment) entry points.
-pub const SCENE: &str = concat!(
+pub(crate) const SCENE: &str = concat!(
     include_str!("../../shaders/fat_border_lib.wgsl"),
     "\n",
     include_str!("../../shaders/scene.wgsl")
@@ -18,7 +18,7 @@ pub const FAT_BORDER_TWIN: &str = concat!(
 );
 
 /// Copies a read-back frame onto a window surface (the viewer).
-pub const PRESENT: &str = include_str!("../../shaders/present.wgsl");
+pub(crate) const PRESENT: &str = include_str!("../../shaders/present.wgsl");
 
 /// Every composed module with the `shaders/` files it is made of (validated by a test, which
 /// also checks that every file in `shaders/` is used by some module).

@@ -5,9 +5,9 @@ use super::text::{draw_text, text_height, text_width};
 use crate::drive::flythrough::FrameRecord;
 
 /// Columns of the per-frame table.
-pub const CSV_HEADER: &str = "frame,frame_ms,tessellation_ms,retessellated,from_cache,queue_length,max_error_px,p99_error_px,triangles,pixel_error,crack_pixels,crack_pixels_off,upload_ms,draw_ms,cpu_ms,uploaded_bytes,trimmed_waiting,made,made_cpu_ms,made_triangles,redone,redone_cpu_ms,reused";
+pub(crate) const CSV_HEADER: &str = "frame,frame_ms,tessellation_ms,retessellated,from_cache,queue_length,max_error_px,p99_error_px,triangles,pixel_error,crack_pixels,crack_pixels_off,upload_ms,draw_ms,cpu_ms,uploaded_bytes,trimmed_waiting,made,made_cpu_ms,made_triangles,redone,redone_cpu_ms,reused";
 
-/// One frame's row, columns as [`CSV_HEADER`].
+/// One frame's row, columns as `CSV_HEADER`.
 pub fn csv_row(r: &FrameRecord) -> String {
     format!(
         "{},{:.3},{:.3},{},{},{},{:.4},{:.4},{},{:.4},{},{},{:.3},{:.3},{:.3},{},{},{},{:.3},{},{},{:.3},{}",
@@ -37,7 +37,7 @@ pub fn csv_row(r: &FrameRecord) -> String {
     )
 }
 
-/// Header ([`CSV_HEADER`]) and one line per record, each ending in a newline.
+/// Header (`CSV_HEADER`) and one line per record, each ending in a newline.
 pub fn frames_csv(records: &[FrameRecord]) -> String {
     super::table(CSV_HEADER, records, csv_row)
 }

@@ -6,7 +6,7 @@ use crate::drive::implode::AnimRecord;
 use crate::io::png::{self, WriteError};
 
 /// The header of `frames.csv`; one row per frame follows.
-pub const CSV_HEADER: &str = "frame,amount,frame_ms,tessellation_ms,retessellated,triangles,max_error_px,crack_pixels,growth_pixels,growth_max_px";
+pub(crate) const CSV_HEADER: &str = "frame,amount,frame_ms,tessellation_ms,retessellated,triangles,max_error_px,crack_pixels,growth_pixels,growth_max_px";
 
 /// One frame's row (no newline): amount to 4 decimals, times and error to 3; the crack columns
 /// are empty when the frame was not checked.

@@ -5,7 +5,7 @@
 use crate::drive::scale::ScalePoint;
 
 /// Columns of the CSV table (times in ms, memory in bytes; an empty cell = not measured).
-pub const CSV_HEADER: &str = "model,patches,load_ms,first_frame_ms,tessellate_ms,upload_ms,frame_p50_ms,frame_max_ms,retessellate_ms,cpu_ms,uploaded_bytes,frames,jump_frame,converge_frames,triangles_first,triangles_last,scene_bytes,lod_bytes_first,lod_bytes_last,rss_start_bytes,rss_load_bytes,rss_tessellate_bytes,peak_rss_bytes,failure";
+pub(crate) const CSV_HEADER: &str = "model,patches,load_ms,first_frame_ms,tessellate_ms,upload_ms,frame_p50_ms,frame_max_ms,retessellate_ms,cpu_ms,uploaded_bytes,frames,jump_frame,converge_frames,triangles_first,triangles_last,scene_bytes,lod_bytes_first,lod_bytes_last,rss_start_bytes,rss_load_bytes,rss_tessellate_bytes,peak_rss_bytes,failure";
 
 fn opt<T: ToString>(v: Option<T>) -> String {
     v.map_or(String::new(), |v| v.to_string())
@@ -24,7 +24,7 @@ fn clean(s: &str) -> String {
         .collect()
 }
 
-/// One point's row, columns as [`CSV_HEADER`] (the model's name and the failure through
+/// One point's row, columns as `CSV_HEADER` (the model's name and the failure through
 /// `clean`).
 pub fn csv_row(p: &ScalePoint) -> String {
     let model: String = p

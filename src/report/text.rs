@@ -65,18 +65,18 @@ fn glyph(c: char) -> [&'static str; 5] {
 }
 
 /// Width in pixels of `text` at `scale` (4 columns per character: 3 of ink, 1 of space).
-pub fn text_width(text: &str, scale: u32) -> u32 {
+pub(crate) fn text_width(text: &str, scale: u32) -> u32 {
     (text.chars().count() as u32 * 4).saturating_sub(1) * scale
 }
 
 /// Height in pixels of a line of text at `scale`.
-pub fn text_height(scale: u32) -> u32 {
+pub(crate) fn text_height(scale: u32) -> u32 {
     5 * scale
 }
 
 /// Draws `text` with its top-left corner at `(x, y)`, each font pixel a `scale`×`scale` block;
 /// what falls outside the image is clipped.
-pub fn draw_text(
+pub(crate) fn draw_text(
     img: &mut image::RgbaImage,
     (x, y): (i64, i64),
     text: &str,

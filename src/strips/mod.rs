@@ -107,13 +107,13 @@ pub fn join_degenerate(indices: &[u32], starts: &mut [u32]) -> Vec<u32> {
 }
 
 /// Whether `a` and `b` are the same triangle with the same orientation.
-pub fn same_oriented(a: [u32; 3], b: [u32; 3]) -> bool {
+pub(crate) fn same_oriented(a: [u32; 3], b: [u32; 3]) -> bool {
     a == b || a == [b[1], b[2], b[0]] || a == [b[2], b[0], b[1]]
 }
 
 /// `t` rotated so its smallest index comes first (orientation kept): a key for comparing
 /// oriented triangle sets.
-pub fn canonical(t: [u32; 3]) -> [u32; 3] {
+pub(crate) fn canonical(t: [u32; 3]) -> [u32; 3] {
     let k = (0..3).min_by_key(|&k| t[k]).unwrap_or(0);
     [t[k], t[(k + 1) % 3], t[(k + 2) % 3]]
 }

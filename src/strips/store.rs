@@ -64,7 +64,7 @@ impl StripStore {
 
     /// Marks the start of an upload: drops tessellation strips unused for
     /// `KEEP_UPLOADS` uploads and cut strips of patches nobody else holds any more.
-    pub fn begin_upload(&self) {
+    pub(crate) fn begin_upload(&self) {
         let now = self.epoch.fetch_add(1, Ordering::Relaxed) + 1;
         lock(&self.tessellated).retain(|_, (_, used)| now - *used <= KEEP_UPLOADS);
         lock(&self.cuts).retain(|_, e| Arc::strong_count(&lock(e).patch) > 1);

@@ -56,7 +56,7 @@ pub struct TunnelOptions {
     pub swap_aware: bool,
     /// Candidate tunnels one search may complement and undo (loops, swaps) before it gives up.
     pub max_tries: usize,
-    /// Passes over all strip ends in [`TunnelStrips::optimize`] (stops early when a pass finds
+    /// Passes over all strip ends in `TunnelStrips::optimize` (stops early when a pass finds
     /// no tunnel).
     pub passes: usize,
 }
@@ -396,7 +396,7 @@ impl TunnelStrips {
 
     /// One tunnel search from strip end `s`, at most `max_len` dual edges; complements the
     /// first tunnel found that closes no loop. Returns whether strips were joined.
-    pub fn tunnel_from(&mut self, s: u32, max_len: usize) -> bool {
+    pub(crate) fn tunnel_from(&mut self, s: u32, max_len: usize) -> bool {
         let su = s as usize;
         if su >= self.tri.len() || !self.alive[su] || self.degree(s) >= 2 {
             return false;
@@ -515,7 +515,7 @@ impl TunnelStrips {
 
     /// Static stripification: tunnels from every strip end, pass after pass, until a pass
     /// joins nothing (or `passes` ran). Returns the tunnels made.
-    pub fn optimize(&mut self) -> usize {
+    pub(crate) fn optimize(&mut self) -> usize {
         let before = self.stats.tunnels;
         if self.opts.greedy_start && self.strip_edges == 0 {
             self.greedy();
@@ -661,7 +661,7 @@ impl TunnelStrips {
     }
 
     /// Appends the strips to `out` (joined by [`RESTART`](super::RESTART)); returns how many were written.
-    pub fn write_indices(&mut self, out: &mut Vec<u32>) -> usize {
+    pub(crate) fn write_indices(&mut self, out: &mut Vec<u32>) -> usize {
         self.seen_epoch = self.seen_epoch.wrapping_add(1);
         let done = self.seen_epoch;
         let mut strips = 0;

@@ -8,7 +8,7 @@
 //! `hu × hv`, Taylor expansion around the evaluation point gives
 //! `|S − L| ≤ (M_uu hu² + 2 M_uv hu hv + M_vv hv²) / 8`, where `M_xy` bound the second
 //! derivatives over the patch (from the control net's second differences, see
-//! [`BezierPatch::second_derivative_bounds`]). The resolution is the smallest grid (greedy in
+//! `BezierPatch::second_derivative_bounds`). The resolution is the smallest grid (greedy in
 //! the direction that gains most) whose bound is ≤ ε.
 //!
 //! **Measurement.** The error reported is the largest distance between `S(u,v)` and the
@@ -45,7 +45,7 @@ impl BezierTessellator {
     }
 
     /// Smallest grid whose a-priori bound is ≤ `eps` (capped at [`MAX_SEGMENTS`]), and that bound.
-    pub fn resolution_for(patch: &BezierPatch, eps: f64) -> (Resolution, f64) {
+    pub(crate) fn resolution_for(patch: &BezierPatch, eps: f64) -> (Resolution, f64) {
         let m = patch.second_derivative_bounds();
         let bound = |nu: u32, nv: u32| {
             let (hu, hv) = (1.0 / nu as f64, 1.0 / nv as f64);
@@ -95,7 +95,7 @@ impl BezierTessellator {
     }
 
     /// Tessellates on a given grid; `eps` is only recorded as the target.
-    pub fn tessellate_grid(
+    pub(crate) fn tessellate_grid(
         &mut self,
         patch: &BezierPatch,
         res: Resolution,
@@ -223,7 +223,8 @@ fn triangle_error(patch: &BezierPatch, uv: &[(f64, f64); 3], p: &[DVec3; 3]) -> 
 
 /// Dense check used by tests: sampled distance on an `k × k` barycentric lattice of every
 /// triangle (more samples than the per-frame measurement).
-pub fn dense_error(patch: &BezierPatch, mesh: &PatchMesh, k: usize) -> f64 {
+#[cfg(test)]
+pub(crate) fn dense_error(patch: &BezierPatch, mesh: &PatchMesh, k: usize) -> f64 {
     let (nu, nv) = (mesh.resolution.nu as f64, mesh.resolution.nv as f64);
     let cv = mesh.resolution.nv as usize + 1;
     let uv_of = |idx: u32| {

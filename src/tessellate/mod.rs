@@ -7,8 +7,9 @@
 pub mod bezier;
 pub mod trimmed;
 
-pub use bezier::{BezierTessellator, MAX_SEGMENTS, Resolution};
-pub use trimmed::{TrimError, TrimmedTessellator};
+pub(crate) use bezier::Resolution;
+pub use bezier::{BezierTessellator, MAX_SEGMENTS};
+pub use trimmed::TrimmedTessellator;
 
 use glam::{DMat3, DVec3, Vec3};
 use rayon::prelude::*;
@@ -137,7 +138,7 @@ pub struct CutRanges {
 
 /// Smallest fat-border half-width, as a fraction of [`PatchMesh::eps_border`]
 /// ([`PatchMesh::border_width`]).
-pub const MIN_BORDER_WIDTH: f64 = 0.25;
+pub(crate) const MIN_BORDER_WIDTH: f64 = 0.25;
 
 impl PatchMesh {
     /// Error the fat borders of this patch must cover: the larger of target and achieved.
@@ -146,7 +147,7 @@ impl PatchMesh {
     }
 
     /// Half-width of this patch's fat borders across the view: its measured
-    /// [`PatchMesh::border_error`] when known, at least [`MIN_BORDER_WIDTH`] × and at most
+    /// [`PatchMesh::border_error`] when known, at least `MIN_BORDER_WIDTH` × and at most
     /// [`PatchMesh::eps_border`]; the push-back away from the viewer stays `eps_border`.
     ///
     /// Why the border's own error is enough (Balázs et al. 2004, §3 ask for ε, a bound on the
@@ -255,7 +256,7 @@ impl Tessellators {
     /// As [`Tessellators::patch`], for a frame loop: a mesh patch's cut is moved from `cut`
     /// (the patch's previous cut, kept by the caller: per-view state, not the scene's) to
     /// `eps`, and left there for the next call (Holst §3, frame coherence).
-    pub fn patch_from(
+    pub(crate) fn patch_from(
         &mut self,
         patch: &Patch,
         eps: f64,
@@ -498,7 +499,7 @@ pub fn placed(unplaced: &std::sync::Arc<PatchMesh>, patch: &Patch) -> PatchMesh 
 /// (the error raised by the instance's `error_added`; a border moved off its curve by that
 /// much has no measured border error: fat borders the whole ε wide, as the placed shader
 /// draws them), `patch`'s id and colour.
-pub fn instance_of(shared: &PatchMesh, instance: Instance, patch: &Patch) -> PatchMesh {
+pub(crate) fn instance_of(shared: &PatchMesh, instance: Instance, patch: &Patch) -> PatchMesh {
     PatchMesh {
         patch_id: patch.id,
         color: patch.color,
@@ -576,7 +577,7 @@ pub fn tessellate_scene_with(scene: &Scene, tol: f64, shared_borders: bool) -> V
 /// control). Patches sharing a border curve with the same parameterisation then share border
 /// vertices, which the crack check uses as its watertight reference. Trimmed faces are not
 /// on a common grid: they get an empty mesh here (see `check::crack::reference_meshes`).
-pub fn tessellate_scene_uniform(scene: &Scene, n: u32) -> Vec<PatchMesh> {
+pub(crate) fn tessellate_scene_uniform(scene: &Scene, n: u32) -> Vec<PatchMesh> {
     scene
         .patches
         .par_iter()

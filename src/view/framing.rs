@@ -29,7 +29,7 @@ pub enum NamedView {
 }
 
 impl NamedView {
-    pub const ALL: [NamedView; 7] = [
+    pub(crate) const ALL: [NamedView; 7] = [
         NamedView::Front,
         NamedView::Back,
         NamedView::Left,
@@ -82,7 +82,7 @@ impl std::str::FromStr for NamedView {
 
 /// The model's front, right and up unit vectors for its up axis.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ModelFrame {
+pub(crate) struct ModelFrame {
     pub front: DVec3,
     pub right: DVec3,
     pub up: DVec3,
@@ -166,7 +166,7 @@ impl Framing {
     /// The screen's up vector for a camera looking from `dir`: the model's up, or, looking
     /// along it (top and bottom views), the model's back (top) or front (bottom), so that the
     /// front stays at the bottom of a top view.
-    pub fn screen_up(dir: DVec3, up: DVec3) -> DVec3 {
+    pub(crate) fn screen_up(dir: DVec3, up: DVec3) -> DVec3 {
         let f = ModelFrame::of(up);
         if dir.cross(f.up).length() > 1e-6 {
             f.up
@@ -202,7 +202,7 @@ impl View {
 
     /// Frames `bounds` looking from direction `dir` (centre → eye), the camera
     /// `1 + margin` times the distance at which the sphere touches the nearer image edges.
-    pub fn framing_with_margin(
+    pub(crate) fn framing_with_margin(
         bounds: &Sphere,
         up: DVec3,
         dir: DVec3,

@@ -21,7 +21,8 @@
 
 mod framing;
 
-pub use framing::{DEFAULT_MARGIN, Framing, ModelFrame, NamedView};
+pub(crate) use framing::ModelFrame;
+pub use framing::{DEFAULT_MARGIN, Framing, NamedView};
 
 use glam::{DMat4, DVec3, DVec4, Mat4};
 
@@ -167,7 +168,8 @@ impl View {
     }
 
     /// Unit direction from `p` towards the viewer (see [`View::viewer`]).
-    pub fn towards_viewer(&self, p: DVec3) -> DVec3 {
+    #[cfg(test)]
+    pub(crate) fn towards_viewer(&self, p: DVec3) -> DVec3 {
         let v = self.viewer();
         (v.truncate() - p * v.w)
             .try_normalize()
@@ -213,7 +215,7 @@ impl View {
     }
 
     /// World → clip space, in f32 for the GPU.
-    pub fn view_proj_f32(&self) -> Mat4 {
+    pub(crate) fn view_proj_f32(&self) -> Mat4 {
         (self.proj_matrix() * self.view_matrix()).as_mat4()
     }
 
@@ -225,7 +227,7 @@ impl View {
 
     /// [`View::eps_obj`] at `pixel_error` for many spheres, the view's constants computed
     /// once (the same arithmetic, so the same values).
-    pub fn eps_of(&self, pixel_error: f64) -> EpsOf {
+    pub(crate) fn eps_of(&self, pixel_error: f64) -> EpsOf {
         EpsOf {
             eye: self.eye,
             near: self.near,
@@ -309,7 +311,7 @@ impl View {
 
 /// [`View::eps_obj`] with the view's constants computed once ([`View::eps_of`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct EpsOf {
+pub(crate) struct EpsOf {
     eye: DVec3,
     near: f64,
     pixel_error: f64,
@@ -385,7 +387,7 @@ impl Frustum {
 
 /// Near/far planes around the model's sphere, with a margin so fat borders pushed back by ε
 /// stay inside the frustum.
-pub fn fit_near_far(eye: DVec3, target: DVec3, bounds: &Sphere) -> (f64, f64) {
+pub(crate) fn fit_near_far(eye: DVec3, target: DVec3, bounds: &Sphere) -> (f64, f64) {
     let axis = (target - eye).try_normalize().unwrap_or(DVec3::NEG_Z);
     let r = bounds.radius.max(1e-9) * 1.05;
     let c = (bounds.center - eye).dot(axis);

@@ -12,7 +12,7 @@
 //! included, be off by γ pixels):
 //!
 //! * **inside** — every pixel of N is covered and N holds no occluding contour (its depth range
-//!   is at most what a surface sloping by [`MAX_SLOPE`] pixel sizes per pixel spans): the pixel
+//!   is at most what a surface sloping by `MAX_SLOPE` pixel sizes per pixel spans): the pixel
 //!   is at least r px inside the true silhouette and r px away from where one surface passes in
 //!   front of another, where the allowed error may legitimately show the surface behind;
 //! * **crack** — inside, and the actual image shows the background, *or* a surface behind the
@@ -37,18 +37,18 @@ use crate::tessellate::{
 use crate::view::View;
 
 /// Tolerance factor on ε for "behind the true front surface" (see module doc).
-pub const DEPTH_TOLERANCE_EPS: f64 = 3.25;
+pub(crate) const DEPTH_TOLERANCE_EPS: f64 = 3.25;
 /// Steepest depth slope (depth per pixel, in pixel sizes) of a surface still treated as
 /// continuous; a larger depth jump within the window is an occluding contour.
-pub const MAX_SLOPE: f64 = 4.0;
+pub(crate) const MAX_SLOPE: f64 = 4.0;
 /// The reference is tessellated to this fraction of each patch's ε.
-pub const REFERENCE_EPS_FRACTION: f64 = 0.25;
+pub(crate) const REFERENCE_EPS_FRACTION: f64 = 0.25;
 /// Upper limit on the reference grid.
-pub const MAX_REFERENCE_GRID: u32 = 256;
+pub(crate) const MAX_REFERENCE_GRID: u32 = 256;
 /// Sentinel background for checks (magenta: never a flat-shaded surface colour here).
 pub const SENTINEL: [u8; 3] = [255, 0, 255];
 /// Flat surface colour for checks.
-pub const CHECK_SURFACE: [f32; 3] = [0.5, 0.5, 0.5];
+pub(crate) const CHECK_SURFACE: [f32; 3] = [0.5, 0.5, 0.5];
 
 /// Pixel counts for one rendered image.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -83,7 +83,7 @@ impl CrackCounts {
 
 /// Reference meshes for `view`, welded along shared borders. Bézier patches: one shared
 /// uniform grid fine enough for every patch (returned as the grid size). Trimmed faces: every
-/// face at the smallest ε of the view (× [`REFERENCE_EPS_FRACTION`]) with border polylines
+/// face at the smallest ε of the view (× `REFERENCE_EPS_FRACTION`) with border polylines
 /// that depend only on the curve and ε, so that shared edges get the same points (grid size 0).
 /// Mesh patches: the full-resolution mesh (exact; neighbours share their border vertices).
 pub fn reference_meshes(scene: &Scene, view: &View, pixel_error: f64) -> (Vec<PatchMesh>, u32) {
@@ -122,7 +122,7 @@ pub fn reference_meshes(scene: &Scene, view: &View, pixel_error: f64) -> (Vec<Pa
 
 /// Moves border vertices of different patches that lie within `tol` of each other onto one
 /// position (the first seen), so shared borders coincide bit for bit.
-pub fn weld_borders(meshes: &mut [PatchMesh], tol: f32) {
+pub(crate) fn weld_borders(meshes: &mut [PatchMesh], tol: f32) {
     use std::collections::HashMap;
     let tol = tol.max(f32::MIN_POSITIVE);
     let cell = |p: Vec3| ((p / tol).floor()).as_ivec3();
@@ -546,13 +546,13 @@ pub fn check_render_options(fat_borders: FatBorders) -> RenderOptions {
 /// number of drawings of the same view counted against it. Still views (`patchwork check`),
 /// the LOD frame loop and animations (through [`crate::frame::step`]) all use it.
 #[derive(Debug)]
-pub struct Judge {
+pub(crate) struct Judge {
     reference: Frame,
     view: View,
     pixel_error: f64,
 }
 
-/// One drawing counted by a [`Judge`]: the counts, the image and the crack mask.
+/// One drawing counted by a `Judge`: the counts, the image and the crack mask.
 #[derive(Debug)]
 pub struct Verdict {
     pub counts: CrackCounts,
@@ -622,7 +622,7 @@ impl Judge {
 
 /// Scales the ε every mesh declares (target and achieved) by `factor`: their fat borders
 /// are then drawn that much narrower; the triangles do not change.
-pub fn narrow_fat_borders(meshes: &mut [PatchMesh], factor: f64) {
+pub(crate) fn narrow_fat_borders(meshes: &mut [PatchMesh], factor: f64) {
     for m in meshes {
         m.eps_target *= factor;
         m.error *= factor;

@@ -12,7 +12,7 @@
 //!   a `u32` index accessor, each in its own tightly packed buffer view (targets `ARRAY_BUFFER`
 //!   and `ELEMENT_ARRAY_BUFFER`); every view starts on a 4-byte boundary;
 //! - one material per distinct colour: metallic-roughness with `baseColorFactor` = the colour,
-//!   metallic 0, roughness [`ROUGHNESS`], double-sided (CAD faces are drawn from both sides),
+//!   metallic 0, roughness `ROUGHNESS`, double-sided (CAD faces are drawn from both sides),
 //!   `alphaMode` `BLEND` when alpha < 1;
 //! - one node per placed instance, with its `matrix` (omitted when it is the identity), under
 //!   the groups of the assembly tree ([`ExportGroup`]: sub-assemblies, and a root that turns
@@ -36,7 +36,7 @@ use std::path::{Path, PathBuf};
 use gltf::json;
 
 /// The identity matrix, column-major, as in [`ExportNode::matrix`].
-pub const IDENTITY_MATRIX: [f32; 16] = [
+pub(crate) const IDENTITY_MATRIX: [f32; 16] = [
     1.0, 0.0, 0.0, 0.0, //
     0.0, 1.0, 0.0, 0.0, //
     0.0, 0.0, 1.0, 0.0, //
@@ -44,13 +44,14 @@ pub const IDENTITY_MATRIX: [f32; 16] = [
 ];
 
 /// Base colour of meshes without [`ExportMesh::color`]: glTF's own default, opaque white.
-pub const DEFAULT_COLOR: [f32; 4] = [1.0, 1.0, 1.0, 1.0];
+pub(crate) const DEFAULT_COLOR: [f32; 4] = [1.0, 1.0, 1.0, 1.0];
 
 /// Roughness of every exported material: a dull, plastic-like finish.
-pub const ROUGHNESS: f32 = 0.5;
+pub(crate) const ROUGHNESS: f32 = 0.5;
 
-/// Stands for the output path in errors from [`to_glb_bytes`], which writes no file.
-pub const IN_MEMORY: &str = "<in memory>";
+/// Stands for the output path in errors from `to_glb_bytes` (tests), which writes no file.
+#[cfg(test)]
+pub(crate) const IN_MEMORY: &str = "<in memory>";
 
 /// One mesh per part, in the part's own coordinates.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -65,7 +66,7 @@ pub struct ExportMesh {
     /// Triangle list, three indices into `positions` per triangle, counter-clockwise seen from
     /// the front (all materials are double-sided, so the winding only affects lighting).
     pub indices: Vec<u32>,
-    /// Base colour, linear RGBA, each component in `0..=1`; `None` is [`DEFAULT_COLOR`].
+    /// Base colour, linear RGBA, each component in `0..=1`; `None` is `DEFAULT_COLOR`.
     pub color: Option<[f32; 4]>,
 }
 
@@ -124,7 +125,7 @@ pub struct GltfStats {
 
 /// Why a scene could not be exported.
 ///
-/// Every variant names the output path; errors from [`to_glb_bytes`] use [`IN_MEMORY`]. Mesh
+/// Every variant names the output path; errors from `to_glb_bytes` (tests) use `IN_MEMORY`. Mesh
 /// and node numbers are 0-based indices into [`ExportScene::meshes`] and
 /// [`ExportScene::nodes`].
 #[derive(Debug, thiserror::Error)]
@@ -252,7 +253,7 @@ pub enum GltfWriteError {
 }
 
 impl GltfWriteError {
-    /// The output path the error is about ([`IN_MEMORY`] for [`to_glb_bytes`]).
+    /// The output path the error is about (`IN_MEMORY` for `to_glb_bytes`, in tests).
     pub fn path(&self) -> &Path {
         match self {
             GltfWriteError::Io { path, .. }
@@ -339,7 +340,8 @@ fn uri_escape(name: &str) -> String {
 }
 
 /// Encodes `scene` as the bytes of a binary glTF file, with the validation of [`write_glb`].
-pub fn to_glb_bytes(scene: &ExportScene) -> Result<Vec<u8>, GltfWriteError> {
+#[cfg(test)]
+pub(crate) fn to_glb_bytes(scene: &ExportScene) -> Result<Vec<u8>, GltfWriteError> {
     encode(Path::new(IN_MEMORY), scene).map(|(bytes, _)| bytes)
 }
 

@@ -34,7 +34,7 @@ pub struct Entry {
 
 impl Entry {
     /// Whether the entity exists only as part of another (not drawn on its own).
-    pub fn physically_dependent(&self) -> bool {
+    pub(crate) fn physically_dependent(&self) -> bool {
         self.subordinate == 1 || self.subordinate == 3
     }
 }

@@ -5,7 +5,7 @@
 //! points, so curves and surfaces come out in their parent's coordinates.
 //!
 //! References are followed with a stack of the DEs being decoded: a DE met again while it is
-//! being decoded is a [`IgesError::Cycle`]; nesting is bounded by [`MAX_DEPTH`]. Counts in the
+//! being decoded is a [`IgesError::Cycle`]; nesting is bounded by `MAX_DEPTH`. Counts in the
 //! parameters are checked against the parameters present before anything is allocated.
 
 use glam::{DMat4, DVec3, DVec4};
@@ -17,7 +17,7 @@ use super::sections::Param;
 
 /// Most references followed from one entity (composite curves in composite curves, matrices
 /// composed with matrices).
-pub const MAX_DEPTH: usize = 64;
+pub(crate) const MAX_DEPTH: usize = 64;
 
 /// An entity's parameters, with typed access that names the DE and parameter on failure.
 #[derive(Debug)]
@@ -47,7 +47,7 @@ impl Params {
     }
 
     /// A real with a default for an empty or absent parameter.
-    pub fn real_or(&self, index: usize, default: f64) -> Result<f64, IgesError> {
+    pub(crate) fn real_or(&self, index: usize, default: f64) -> Result<f64, IgesError> {
         match self.p.get(index) {
             None | Some(Param::Empty) => Ok(default),
             Some(_) => self.real(index, "parameter"),
@@ -123,7 +123,7 @@ impl<'f, 'a> Decoder<'f, 'a> {
     }
 
     /// Runs `f` on the entry DE `de` (pointed to by `from` as `what`), with `de` on the stack.
-    pub fn visit<T>(
+    pub(crate) fn visit<T>(
         &mut self,
         de: i64,
         from: usize,
@@ -305,7 +305,7 @@ impl<'f, 'a> Decoder<'f, 'a> {
     }
 }
 
-pub fn expect_type(e: &Entry, types: &[i64]) -> Result<(), IgesError> {
+pub(crate) fn expect_type(e: &Entry, types: &[i64]) -> Result<(), IgesError> {
     if types.contains(&e.entity_type) {
         return Ok(());
     }

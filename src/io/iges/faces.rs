@@ -6,10 +6,10 @@
 //! A 142 may give its boundary twice: as a curve in the surface's parameter space (BPTR) and in
 //! model space (CPTR). The parameter-space curve, lifted onto the surface, lies on the surface
 //! exactly; it is used when it agrees with the model-space curve (every sample within
-//! [`AGREEMENT`] of the loop's size) or when it is the only one, else the model-space curve.
+//! `AGREEMENT` of the loop's size) or when it is the only one, else the model-space curve.
 //! Degenerate segments (a side collapsed at a pole) are dropped; consecutive segments are
 //! oriented head to tail and their shared vertices made identical; a gap larger than
-//! [`MAX_GAP`] of the loop's size makes the face invalid.
+//! `MAX_GAP` of the loop's size makes the face invalid.
 
 use std::collections::{HashMap, HashSet};
 use std::sync::Arc;
@@ -28,9 +28,9 @@ use crate::model::{Sphere, TrimmedFace};
 
 /// How far (relative to the loop's size) a lifted parameter-space curve may stray from the
 /// model-space curve and still be used.
-pub const AGREEMENT: f64 = 1e-3;
+pub(crate) const AGREEMENT: f64 = 1e-3;
 /// Largest gap between consecutive boundary segments, relative to the loop's size.
-pub const MAX_GAP: f64 = 2e-3;
+pub(crate) const MAX_GAP: f64 = 2e-3;
 /// Edge ids of the sides of a whole parameter rectangle (face ids are DE numbers, far below).
 const RECT_EDGE_ID: u64 = 1 << 40;
 /// Most nested subfigure instances followed.

@@ -23,7 +23,7 @@ pub struct Nurbs {
 }
 
 /// Why a B-spline cannot be used.
-pub fn check_bspline(
+pub(crate) fn check_bspline(
     degree: usize,
     knots: &[f64],
     n_points: usize,
@@ -95,7 +95,7 @@ impl Nurbs {
         }
     }
 
-    pub fn transformed(mut self, m: &DMat4) -> Nurbs {
+    pub(crate) fn transformed(mut self, m: &DMat4) -> Nurbs {
         for p in &mut self.points {
             *p = m.transform_point3(*p);
         }
@@ -103,7 +103,7 @@ impl Nurbs {
     }
 
     /// As a truck 3D curve.
-    pub fn curve3d(&self) -> Result<Curve3D, String> {
+    pub(crate) fn curve3d(&self) -> Result<Curve3D, String> {
         let knots = KnotVec::from(self.knots.clone());
         let p3 = |p: &DVec3| Point3::new(p.x, p.y, p.z);
         Ok(match &self.weights {
@@ -126,7 +126,7 @@ impl Nurbs {
     }
 
     /// As a truck 2D curve (x, y of the control points: a parameter-space curve).
-    pub fn curve2d(&self) -> Result<Curve2D, String> {
+    pub(crate) fn curve2d(&self) -> Result<Curve2D, String> {
         let knots = KnotVec::from(self.knots.clone());
         Ok(match &self.weights {
             None => Curve2D::BSplineCurve(
@@ -163,7 +163,7 @@ pub struct NurbsPatch {
 }
 
 impl NurbsPatch {
-    pub fn transformed(mut self, m: &DMat4) -> NurbsPatch {
+    pub(crate) fn transformed(mut self, m: &DMat4) -> NurbsPatch {
         for p in self.points.iter_mut().flatten() {
             *p = m.transform_point3(*p);
         }
@@ -217,7 +217,7 @@ pub enum SurfaceDef {
 }
 
 impl SurfaceDef {
-    pub fn transformed(self, m: &DMat4) -> SurfaceDef {
+    pub(crate) fn transformed(self, m: &DMat4) -> SurfaceDef {
         match self {
             SurfaceDef::Nurbs(n) => SurfaceDef::Nurbs(n.transformed(m)),
             SurfaceDef::Plane { origin, x, y } => SurfaceDef::Plane {

@@ -65,7 +65,7 @@ impl Global {
 
     /// Millimetres per model unit, from the units flag (parameter 14) and name (15); `None`
     /// when the flag is unknown.
-    pub fn unit_mm(&self) -> Option<f64> {
+    pub(crate) fn unit_mm(&self) -> Option<f64> {
         let by_name = |name: &str| -> Option<f64> {
             Some(match name.trim().to_ascii_uppercase().as_str() {
                 "IN" | "INCH" => 25.4,
@@ -216,7 +216,7 @@ pub fn split(bytes: &[u8]) -> Result<Sections<'_>, IgesError> {
 }
 
 /// An integer in a fixed field (blank = 0), `None` if not an integer.
-pub fn field_int(f: &[u8]) -> Option<i64> {
+pub(crate) fn field_int(f: &[u8]) -> Option<i64> {
     let s = std::str::from_utf8(f).ok()?.trim();
     if s.is_empty() {
         return Some(0);
@@ -290,7 +290,7 @@ fn parse_global(text: &[u8]) -> Result<Global, String> {
 /// Free-format parameters up to the record delimiter. Returns them and the byte just after
 /// the record delimiter; an error when the text ends first or a token is neither a number nor
 /// a Hollerith string.
-pub fn parse_free(text: &[u8], pd: u8, rd: u8) -> Result<(Vec<Param>, usize), String> {
+pub(crate) fn parse_free(text: &[u8], pd: u8, rd: u8) -> Result<(Vec<Param>, usize), String> {
     let mut out = Vec::new();
     let mut pos = 0;
     loop {

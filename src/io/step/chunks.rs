@@ -22,7 +22,7 @@ const MIN_CHUNK: usize = 64 * 1024;
 /// must be only what our scanner read ([`super::p21::P21File::end`]): what follows
 /// `END-ISO-10303-21;` (a second file appended, say) was not checked and must never reach
 /// ruststep and truck.
-pub fn entity_instances(text: &str) -> Result<Vec<EntityInstance>, String> {
+pub(crate) fn entity_instances(text: &str) -> Result<Vec<EntityInstance>, String> {
     let statements = statements(text);
     let chunks = chunks(text, &statements, rayon::current_num_threads() * 4);
     let parsed: Option<Vec<Vec<EntityInstance>>> = chunks
@@ -44,7 +44,7 @@ pub fn entity_instances(text: &str) -> Result<Vec<EntityInstance>, String> {
 }
 
 /// ruststep's own parse of the whole exchange structure.
-pub fn whole_file(text: &str) -> Result<Vec<EntityInstance>, String> {
+pub(crate) fn whole_file(text: &str) -> Result<Vec<EntityInstance>, String> {
     let exchange = ruststep::parser::parse(text).map_err(|e| e.to_string())?;
     Ok(exchange.data.into_iter().flat_map(|s| s.entities).collect())
 }

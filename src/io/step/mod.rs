@@ -66,7 +66,7 @@ pub fn read(bytes: &[u8], path: &Path) -> Result<StepModel, LoadError> {
 /// entity id), each shell's faces as it lists them; every edge converted once, whichever face
 /// reaches it first (an edge's conversion depends on the edge alone); the loose-edge warning
 /// lists edges in the order one thread would have met them.
-pub fn read_with(
+pub(crate) fn read_with(
     bytes: &[u8],
     path: &Path,
     progress: &dyn crate::util::Progress,

@@ -20,7 +20,7 @@ use super::p21::{P21File, Param};
 
 /// The tallest reference chain given to truck. At about 1 KiB of stack per level of truck's
 /// resolution, this stays far inside a 2 MiB worker thread's stack.
-pub const MAX_REFERENCE_HEIGHT: usize = 64;
+pub(crate) const MAX_REFERENCE_HEIGHT: usize = 64;
 
 /// Refused entities: id → reason (a cycle, or the height and the limit).
 pub fn refused(file: &P21File) -> BTreeMap<u64, String> {

@@ -81,7 +81,12 @@ impl TrimmedFace {
     /// `tol`, the range is searched again on a grid fine enough to step on every sheet nearer
     /// than that (`TrimmedFace::fine_guesses`), and the nearer result kept. Returns the
     /// parameter and whether the fine search ran.
-    pub fn project_on(&self, p: DVec3, hint: Option<DVec2>, tol: f64) -> (Option<DVec2>, bool) {
+    pub(crate) fn project_on(
+        &self,
+        p: DVec3,
+        hint: Option<DVec2>,
+        tol: f64,
+    ) -> (Option<DVec2>, bool) {
         let first = self.project(p, hint);
         let off = |uv: &DVec2| self.point(*uv).distance(p);
         let d = first.as_ref().map_or(f64::INFINITY, off);
@@ -103,7 +108,7 @@ impl TrimmedFace {
     /// mislead the local search), and on a fine grid ([`TrimmedFace::project_on`]) while
     /// `fine_left`: the first fine search that still ends farther than `far` (an edge off its
     /// surface) clears it, so such a loop pays for one.
-    pub fn project_along(
+    pub(crate) fn project_along(
         &self,
         p: DVec3,
         hint: Option<DVec2>,

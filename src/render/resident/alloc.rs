@@ -13,7 +13,7 @@ use std::collections::BTreeMap;
 
 /// One live range moved by [`Allocator::compact`]: `len` units from `from` to `to`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Move {
+pub(crate) struct Move {
     pub from: u64,
     pub to: u64,
     pub len: u64,
@@ -21,7 +21,7 @@ pub struct Move {
 
 /// First-fit range allocator over `[0, capacity)`.
 #[derive(Clone, Debug, Default)]
-pub struct Allocator {
+pub(crate) struct Allocator {
     capacity: u64,
     /// Free ranges, start → length; sorted, coalesced (no two touch).
     free: BTreeMap<u64, u64>,
@@ -42,7 +42,7 @@ impl Allocator {
         a
     }
 
-    pub fn capacity(&self) -> u64 {
+    pub(crate) fn capacity(&self) -> u64 {
         self.capacity
     }
 
@@ -57,12 +57,12 @@ impl Allocator {
     }
 
     /// Free ranges (1 when packed).
-    pub fn free_ranges(&self) -> usize {
+    pub(crate) fn free_ranges(&self) -> usize {
         self.free.len()
     }
 
     /// The longest free range.
-    pub fn largest_free(&self) -> u64 {
+    pub(crate) fn largest_free(&self) -> u64 {
         self.free.values().copied().max().unwrap_or(0)
     }
 
@@ -87,7 +87,7 @@ impl Allocator {
 
     /// Frees the live range starting at `start`; panics when there is none (a caller bug
     /// that would otherwise corrupt other ranges).
-    pub fn free_range(&mut self, start: u64) {
+    pub(crate) fn free_range(&mut self, start: u64) {
         let len = self
             .live
             .remove(&start)
@@ -112,7 +112,7 @@ impl Allocator {
     }
 
     /// Grows the range to `capacity` units (never shrinks); live ranges stay where they are.
-    pub fn grow(&mut self, capacity: u64) {
+    pub(crate) fn grow(&mut self, capacity: u64) {
         if capacity > self.capacity {
             let old = self.capacity;
             self.capacity = capacity;
@@ -126,7 +126,7 @@ impl Allocator {
     ///
     /// The moves may overlap their sources (a range slides onto where another was): copy
     /// from a snapshot of the old contents, as the GPU pool does (old buffer → new buffer).
-    pub fn compact(&mut self, order: impl IntoIterator<Item = u64>) -> Vec<Move> {
+    pub(crate) fn compact(&mut self, order: impl IntoIterator<Item = u64>) -> Vec<Move> {
         let mut old = std::mem::take(&mut self.live);
         let mut sequence: Vec<(u64, u64)> = Vec::with_capacity(old.len());
         for start in order {
@@ -153,6 +153,7 @@ impl Allocator {
 
     /// Checks the invariants (tests): ranges inside the capacity, free and live disjoint and
     /// covering everything, free ranges coalesced.
+    #[cfg(test)]
     pub fn check(&self) -> Result<(), String> {
         let mut all: Vec<(u64, u64, bool)> = self
             .free

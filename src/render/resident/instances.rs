@@ -25,7 +25,7 @@ use crate::tessellate::Instance;
 /// `shaders/scene.wgsl`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct InstanceRecord {
+pub(crate) struct InstanceRecord {
     /// Rows of the placement's 3 × 4 matrix.
     pub rows: [[f32; 4]; 3],
     pub patch_id: u32,

@@ -61,7 +61,7 @@ const REFINE_ROUNDS: usize = 10;
 /// Triangles are refined down to this fraction of ε: 7 samples find a triangle's largest
 /// distance to within a few per cent only (bearing.iges face #2445: 0.998 ε by its samples,
 /// 1.008 ε by `check::fidelity`'s dense ones).
-pub const REFINE_TARGET: f64 = 0.95;
+pub(crate) const REFINE_TARGET: f64 = 0.95;
 /// Most vertices per face.
 const MAX_VERTICES: usize = 400_000;
 /// Vertices per ε² of a face's area that refinement may reach: a triangulation of edges
@@ -172,7 +172,7 @@ impl TrimmedTessellator {
     /// split by the surface criterion of step 2 (which depends on the face), so two faces
     /// tessellated with the same ε share their border points exactly; only the closing segments
     /// this tessellator adds along a closed surface's bounds (shared with no other face) are.
-    pub fn tessellate_with(
+    pub(crate) fn tessellate_with(
         &mut self,
         face: &TrimmedFace,
         eps: f64,
@@ -392,7 +392,7 @@ impl TrimmedTessellator {
     /// [`TrimmedTessellator::tessellate`] of `face`: each sample is found on the surface from
     /// the parameter of the nearest point of that edge's border polyline. `None` where the
     /// search fails or the surface has no normal (a pole).
-    pub fn edge_normals(&self, face: &TrimmedFace) -> Vec<Vec<EdgeNormals>> {
+    pub(crate) fn edge_normals(&self, face: &TrimmedFace) -> Vec<Vec<EdgeNormals>> {
         // The polyline's parameters (curve, surface) per edge of the face.
         let mut on_edge: std::collections::HashMap<(u32, u32), Vec<(f64, DVec2)>> =
             Default::default();

@@ -15,7 +15,7 @@
 //!
 //! - [`parse`] never panics: on any input it returns a [`P21File`] or a [`P21Error`] that names
 //!   the 1-based line and, inside an entity instance, its `#id`. List nesting is capped at
-//!   [`MAX_NESTING`] so that hostile input cannot overflow the stack.
+//!   `MAX_NESTING` so that hostile input cannot overflow the stack.
 //! - Entities are kept in file order; [`P21File::get`] finds one by id in O(1). Duplicate ids
 //!   are an error.
 //! - Record names are upper case. Strings are decoded: `''` → `'`, `\\` → `\`, the `\X\hh`,
@@ -39,7 +39,7 @@ use std::collections::HashMap;
 use std::fmt;
 
 /// Deepest nesting of lists and typed parameters accepted inside one record.
-pub const MAX_NESTING: usize = 128;
+pub(crate) const MAX_NESTING: usize = 128;
 
 /// A parsed STEP physical file.
 #[derive(Debug, Clone, Default)]
@@ -99,7 +99,7 @@ impl Entity {
     }
 
     /// Whether the instance was written as a complex record `( A() B() )`.
-    pub fn is_complex(&self) -> bool {
+    pub(crate) fn is_complex(&self) -> bool {
         self.parts.len() > 1
     }
 
@@ -110,7 +110,7 @@ impl Entity {
 
     /// Type name: the record name, or for a complex instance the names joined by `+`
     /// (`LENGTH_UNIT+NAMED_UNIT+SI_UNIT`).
-    pub fn type_name(&self) -> String {
+    pub(crate) fn type_name(&self) -> String {
         let names: Vec<&str> = self.parts.iter().map(|r| r.name.as_str()).collect();
         names.join("+")
     }
@@ -137,12 +137,12 @@ impl Record {
     }
 
     /// Attribute `i` as a number (see [`Param::as_f64`]).
-    pub fn f64_at(&self, i: usize) -> Option<f64> {
+    pub(crate) fn f64_at(&self, i: usize) -> Option<f64> {
         self.arg(i).and_then(Param::as_f64)
     }
 
     /// Attribute `i` as a string.
-    pub fn str_at(&self, i: usize) -> Option<&str> {
+    pub(crate) fn str_at(&self, i: usize) -> Option<&str> {
         self.arg(i).and_then(Param::as_str)
     }
 
@@ -199,7 +199,7 @@ impl Param {
     }
 
     /// The items of a [`Param::List`].
-    pub fn as_list(&self) -> Option<&[Param]> {
+    pub(crate) fn as_list(&self) -> Option<&[Param]> {
         match self {
             Param::List(items) => Some(items),
             _ => None,
@@ -216,16 +216,11 @@ impl Param {
     }
 
     /// The name of a [`Param::Enum`] without dots.
-    pub fn as_enum(&self) -> Option<&str> {
+    pub(crate) fn as_enum(&self) -> Option<&str> {
         match self {
             Param::Enum(s) => Some(s),
             _ => None,
         }
-    }
-
-    /// Whether the value is `$`.
-    pub fn is_unset(&self) -> bool {
-        matches!(self, Param::Unset)
     }
 }
 
@@ -301,7 +296,7 @@ pub enum P21Error {
         first_line: usize,
     },
 
-    /// Lists nested deeper than [`MAX_NESTING`].
+    /// Lists nested deeper than `MAX_NESTING`.
     #[error("line {line}{}: lists nested deeper than {MAX_NESTING}", At(.entity))]
     TooDeep { line: usize, entity: Option<u64> },
 

@@ -26,7 +26,7 @@
 //!    `NEXT_ASSEMBLY_USAGE_OCCURRENCE`), or, in a file without products, from the groups that
 //!    are no child of any link. One [`ShellInstance`] per shell and path: a part used twice in an
 //!    assembly gives two instances. Cycles are cut where they close (with a warning), depth is
-//!    capped at [`MAX_DEPTH`] and the instance count at [`MAX_INSTANCES`].
+//!    capped at `MAX_DEPTH` and the instance count at `MAX_INSTANCES`.
 //! 4. Geometry never lost: groups never reached are walked from the identity, then shells in no
 //!    representation are placed at the identity, each time with a warning.
 //!
@@ -69,18 +69,17 @@ use products::Products;
 use styles::colours;
 use units::{length_unit, plane_angle_unit, uncertainty};
 use unsupported::unsupported;
-pub use unsupported::{UNSUPPORTED_IN_ROLE, UNSUPPORTED_PREFIXES, UNSUPPORTED_TYPES};
 use walk::Walk;
 
 /// Deepest assembly nesting followed (levels of links).
-pub const MAX_DEPTH: usize = 64;
+pub(crate) const MAX_DEPTH: usize = 64;
 
 /// Most shell instances produced; a file that would give more is cut with a warning.
-pub const MAX_INSTANCES: usize = 1_000_000;
+pub(crate) const MAX_INSTANCES: usize = 1_000_000;
 
 /// Most representation groups visited in all, so that hostile sharing (each level using the
 /// next one twice) cannot make the traversal exponential.
-pub const MAX_VISITS: usize = 2_000_000;
+pub(crate) const MAX_VISITS: usize = 2_000_000;
 
 /// Product structure of a STEP file; see the module documentation.
 #[derive(Debug, Clone, Default)]
@@ -94,8 +93,8 @@ pub struct Structure {
     /// Colour of styled items (faces, shells, solids, …) by entity id, RGB in 0..=1 as in the
     /// file (clamped).
     pub colors: HashMap<u64, [f32; 3]>,
-    /// Counts of entity types the geometry reader does not use ([`UNSUPPORTED_TYPES`],
-    /// [`UNSUPPORTED_PREFIXES`], [`UNSUPPORTED_IN_ROLE`]), sorted by name.
+    /// Counts of entity types the geometry reader does not use (`UNSUPPORTED_TYPES`,
+    /// `UNSUPPORTED_PREFIXES`, `TRIMMED_CURVE` and `VERTEX_LOOP` in the roles `unsupported` looks at), sorted by name.
     pub unsupported: Vec<(String, usize)>,
     /// How many millimetres one file length unit is (`SI_UNIT(.MILLI.,.METRE.)` → 1,
     /// `CONVERSION_BASED_UNIT('INCH', …)` → 25.4), from the contexts of the representations

@@ -10,7 +10,7 @@ use crate::io::step::p21::P21File;
 /// Entity types, anywhere in the file, that describe geometry to draw but that the STEP
 /// geometry reader does not read: faceted and tessellated B-reps, bounded-surface forms other
 /// than faces, offset curves (offset surfaces are read: `super::super::offset`), wireframes and point/curve sets, constructive solids.
-pub const UNSUPPORTED_TYPES: &[&str] = &[
+pub(crate) const UNSUPPORTED_TYPES: &[&str] = &[
     "BLOCK",
     "BOOLEAN_RESULT",
     "BOXED_HALF_SPACE",
@@ -42,16 +42,14 @@ pub const UNSUPPORTED_TYPES: &[&str] = &[
 
 /// Prefixes of unsupported entity types: the tessellated geometry of ISO 10303-42 edition 4
 /// (`TESSELLATED_SHELL`, `TRIANGULATED_FACE`, `COMPLEX_TRIANGULATED_SURFACE_SET`, …).
-pub const UNSUPPORTED_PREFIXES: &[&str] =
+pub(crate) const UNSUPPORTED_PREFIXES: &[&str] =
     &["TESSELLATED_", "TRIANGULATED_", "COMPLEX_TRIANGULATED_"];
 
-/// Entity types counted as unsupported only in a role where the reader meets them:
-/// `VERTEX_LOOP` as the loop of a `FACE_BOUND`/`FACE_OUTER_BOUND` (a degenerate face bound, e.g.
+/// Counts the unsupported entity types of `file`. Two are counted only in a role where the
+/// reader meets them: `VERTEX_LOOP` as the loop of a `FACE_BOUND`/`FACE_OUTER_BOUND` (a degenerate face bound, e.g.
 /// at a cone apex), and `TRIMMED_CURVE` as the curve of an `EDGE_CURVE`, directly or as the 3D
 /// curve of a `SURFACE_CURVE`/`SEAM_CURVE`/`INTERSECTION_CURVE` (elsewhere, e.g. in a
 /// `GEOMETRIC_CURVE_SET`, they are not counted).
-pub const UNSUPPORTED_IN_ROLE: &[&str] = &["TRIMMED_CURVE", "VERTEX_LOOP"];
-
 pub(super) fn unsupported(file: &P21File) -> Vec<(String, usize)> {
     let mut counts: HashMap<&str, usize> = HashMap::new();
     let mut in_role: HashSet<(&'static str, u64)> = HashSet::new();
