@@ -337,6 +337,8 @@ struct EdgeOut {
     @builtin(position) clip: vec4<f32>,
     // The unpulled world point, for the section planes (`fs_edge` discards what they remove).
     @location(0) world: vec3<f32>,
+    // The patch's outward normal there (`fs_edge` hides back-facing edges of a cut model).
+    @location(1) normal: vec3<f32>,
 };
 
 fn edge_drawn(s: u32) -> bool {
@@ -360,8 +362,10 @@ fn vs_edge(@builtin(vertex_index) i: u32) -> EdgeOut {
     var out: EdgeOut;
     out.clip = EDGE_NOWHERE;
     out.world = vec3<f32>(0.0, 0.0, 0.0);
+    out.normal = vec3<f32>(0.0, 0.0, 0.0);
     if (edge_drawn(s)) {
         out.world = fb_cur(s + (i & 1u));
+        out.normal = fb_normal(s + (i & 1u));
         out.clip = edge_clip(out.world, fb_word_f(s, 3u));
     }
     return out;
@@ -374,20 +378,36 @@ fn vs_edge_placed(@builtin(vertex_index) i: u32, @location(4) record: u32) -> Ed
     var out: EdgeOut;
     out.clip = EDGE_NOWHERE;
     out.world = vec3<f32>(0.0, 0.0, 0.0);
+    out.normal = vec3<f32>(0.0, 0.0, 0.0);
     if (edge_drawn(s)) {
         let r = records[record];
         let m = FbPlacement(r.x, r.y, r.z);
         let eps = fb_word_f(s, 3u) + bitcast<f32>(r.extra.z);
         out.world = fb_place(m, fb_cur(s + (i & 1u)));
+        out.normal = fb_turn(m, fb_normal(s + (i & 1u)));
         out.clip = edge_clip(out.world, eps);
     }
     return out;
 }
 
+// Cut (section planes in use), the model shows its inside, and its back faces with it, where
+// the cap covers them in colour but not in hardware depth (the cap keeps its back face's own
+// depth, `render::section`); an edge drawn from a patch facing away from the viewer there would
+// show through the cap. Each face draws its own border, so an edge a front face shares is
+// still drawn; a back-facing edge of a solid is seen only through a cut, where a cap hides it.
+const EDGE_BACK_FACING: f32 = -0.02;
+
 @fragment
 fn fs_edge(in: EdgeOut) -> @location(0) vec4<f32> {
     if (section_removes(in.world)) {
         discard;
+    }
+    if (globals.mode.z > 0u) {
+        let h = viewer();
+        let v = fb_normalize_or(h.xyz - in.world * h.w, vec3<f32>(0.0, 0.0, 1.0));
+        if (dot(fb_normalize_or(in.normal, v), v) < EDGE_BACK_FACING) {
+            discard;
+        }
     }
     return vec4<f32>(EDGE_COLOR, 1.0);
 }

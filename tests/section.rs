@@ -313,3 +313,59 @@ fn cli_renders_sections_and_refuses_bad_planes() {
         );
     }
 }
+
+/// Edges behind a cap are hidden by it: the cap is at its plane's depth in the hardware depth
+/// too, not only in the linear-depth target. Looking down at the cylinder cut at z = 20 in
+/// perspective, its bottom circle (z = 0) projects inside the cap's disc; with `--edges all` it
+/// showed through the cap as a dark ring when the cap kept its back face's depth.
+#[test]
+fn edges_behind_a_cap_do_not_show_through_it() {
+    let scene = cylinder();
+    let view = View::new(
+        DVec3::new(0.0, 0.0, 100.0),
+        DVec3::new(0.0, 0.0, 20.0),
+        DVec3::Y,
+        0.5,
+        (160, 160),
+        &scene.bounds,
+    );
+    let mut r = common::renderer();
+    let meshes = tessellate_scene(&scene, &view, PIXEL_ERROR);
+    let gpu = r.upload(&meshes);
+    let opts = RenderOptions {
+        msaa: 1,
+        depth: true,
+        fat_borders: FatBorders::Six,
+        sections: plane(DVec3::new(0.0, 0.0, 20.0), DVec3::Z),
+        edges: patchwork::render::Edges::All,
+        ..RenderOptions::default()
+    };
+    let frame = r.render(&gpu, &view, &opts).expect("renders");
+    save(&frame, "edges-behind-cap");
+    let (cx, cy, _) = view.project(DVec3::new(0.0, 0.0, 20.0)).expect("in view");
+    let (ex, _, _) = view.project(DVec3::new(10.0, 0.0, 20.0)).expect("in view");
+    let (bx, _, _) = view.project(DVec3::new(10.0, 0.0, 0.0)).expect("in view");
+    let (r_cap, r_bottom) = ((ex - cx).abs(), (bx - cx).abs());
+    assert!(
+        r_bottom < r_cap - 5.0,
+        "the bottom circle ({r_bottom} px) should project well inside the cap ({r_cap} px)"
+    );
+    // In perspective the cap's specular term varies a little across it; an edge is dark.
+    let centre = frame.pixel(cx as u32, cy as u32);
+    let bg = [255, 255, 255, 255];
+    assert_ne!(centre, bg, "no cap at the centre");
+    let dist = |x: f64, y: f64| ((x - cx).powi(2) + (y - cy).powi(2)).sqrt();
+    for y in 0..frame.height {
+        for x in 0..frame.width {
+            let (px, d) = (frame.pixel(x, y), dist(x as f64 + 0.5, y as f64 + 0.5));
+            let off = (0..3).map(|k| px[k].abs_diff(centre[k])).max().unwrap_or(0);
+            if (d < r_cap - 2.5 && off > 8) || (d > r_cap + 2.5 && px != bg) {
+                save(&frame, "edges-behind-cap-actual");
+                panic!(
+                    "pixel ({x}, {y}), {d:.1} px from the centre (cap radius {r_cap:.1}, bottom \
+                     circle {r_bottom:.1}), is {px:?}; the cap's centre is {centre:?}"
+                );
+            }
+        }
+    }
+}

@@ -16,6 +16,8 @@
 //! linear depth (`fs_depth`) is where the ray meets that plane (`Sections::cap_point` is the
 //! CPU twin). The hardware depth stays the back face's own, so visibility between parts is
 //! decided by real surfaces and a back face hidden behind a front face never claims the cap.
+//! So edges (`render::edges`) on back faces would show through a cap; with planes in use,
+//! `fs_edge` hides those drawn from a patch facing away from the viewer.
 //!
 //! Why not stencil parity: it counts every surface crossing along the ray, so a crack in the
 //! independently tessellated patches flips the parity and speckles the cap, and fat borders
