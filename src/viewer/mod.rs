@@ -566,6 +566,7 @@ impl App {
                     self.options.fov_y,
                     size,
                 );
+                self.pan_for_panel(1.0);
             }
             Key::Character("b") => {
                 self.fat_borders = match self.fat_borders {
@@ -580,7 +581,7 @@ impl App {
             Key::Character("c") => self.toggle_section(),
             Key::Character("[") => self.step_section(-1.0),
             Key::Character("]") => self.step_section(1.0),
-            Key::Character("t") => self.panel.open = !self.panel.open,
+            Key::Character("t") => self.toggle_panel(),
             Key::Character("5") => self.ortho = !self.ortho,
             Key::Named(NamedKey::Space) => {
                 if let Some(p) = self.playing.as_mut() {

@@ -5,7 +5,7 @@
 use winit::event::WindowEvent;
 use winit::event_loop::ActiveEventLoop;
 
-use super::panel::Exploded;
+use super::panel::{Exploded, PANEL_WIDTH};
 use super::{App, Scripted};
 use crate::frame::FrameState;
 
@@ -60,6 +60,31 @@ impl App {
             };
         }
         self.dirty = true;
+    }
+
+    /// `t`: the panel opens or closes, and the camera pans by half its width so that the
+    /// model stays in the middle of what the panel leaves free.
+    pub(super) fn toggle_panel(&mut self) {
+        if self.panel.open {
+            self.pan_for_panel(-1.0);
+            self.panel.open = false;
+        } else {
+            self.panel.open = true;
+            self.pan_for_panel(1.0);
+        }
+    }
+
+    /// Pans by `sign` × half the panel's width when the panel is open (after `f` too).
+    pub(super) fn pan_for_panel(&mut self, sign: f64) {
+        let Some(state) = self.state.as_ref() else {
+            return;
+        };
+        if !self.panel.open {
+            return;
+        }
+        let half = f64::from(PANEL_WIDTH) * 0.5 * state.window.scale_factor();
+        let height = state.config.height;
+        self.orbit.pan(sign * half, 0.0, self.options.fov_y, height);
     }
 
     /// Gives a window event to the panel's egui; whether the panel took it (a press, a wheel
