@@ -664,7 +664,7 @@ impl ApplicationHandler for App {
     }
 
     fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
-        if self.to_panel(&event) {
+        if self.give_panel(&event) {
             return;
         }
         match event {

@@ -90,7 +90,7 @@ impl App {
     /// Gives a window event to the panel's egui; whether the panel took it (a press, a wheel
     /// turn or a key on the open panel: not for the camera; a release always reaches the
     /// camera too, so a drag that ends over the panel ends).
-    pub(super) fn to_panel(&mut self, event: &WindowEvent) -> bool {
+    pub(super) fn give_panel(&mut self, event: &WindowEvent) -> bool {
         let Some(state) = self.state.as_mut() else {
             return false;
         };
