@@ -86,13 +86,26 @@ fn view_with(
     keys: &str,
     extra: &[&str],
 ) -> image::RgbaImage {
+    view_model(display, name, "teapot.bpt", "400x300", frames, keys, extra)
+}
+
+/// As [`view_with`], on `models/MODEL` in a window of `size`.
+fn view_model(
+    display: &Display,
+    name: &str,
+    model: &str,
+    size: &str,
+    frames: usize,
+    keys: &str,
+    extra: &[&str],
+) -> image::RgbaImage {
     let out = common::scratch("viewer").join(format!("{name}.png"));
     let _ = std::fs::remove_file(&out);
-    let model = common::root().join("models/teapot.bpt");
+    let model = common::root().join("models").join(model);
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_patchwork"));
     cmd.arg("view")
         .arg(&model)
-        .args(["--size", "400x300", "--frames", &frames.to_string()])
+        .args(["--size", size, "--frames", &frames.to_string()])
         .arg("--screenshot")
         .arg(&out)
         .args(extra)
@@ -509,5 +522,217 @@ fn section_flag_and_the_c_key() {
         d_off < 0.002,
         "with c, {:.2} % of the pixels differ",
         d_off * 100.0
+    );
+}
+
+/// The part panel's tests run on the l-bracket assembly (18 placed parts) in a 640 × 480
+/// window; the panel is 240 pixels wide on the left (Xvfb: one pixel per point). Rows as
+/// egui 0.37 lays them out (Cargo.lock pins it): "colour by part" at y 36, the explode
+/// slider from x 14 to 108 at y 59, the tree from y 114 in rows of 23 — the third,
+/// `plate_1` (instance 10), is a leaf with its checkbox at x 15.
+fn view_assembly(display: &Display, name: &str, frames: usize, keys: &str) -> image::RgbaImage {
+    view_model(
+        display,
+        name,
+        "as1-oc-214.stp",
+        "640x480",
+        frames,
+        keys,
+        &[],
+    )
+}
+
+/// `t` opens the panel: the window's left 240 columns show it (dark, with its rows) where
+/// the frame — written without the panel — shows the model and white; the rest of the
+/// window is the frame. The capture is kept as `panel-window.png` (README's picture).
+#[test]
+fn the_t_key_shows_the_part_panel() {
+    let display = Display::open();
+    let out = common::scratch("viewer").join("panel-frame.png");
+    let _ = std::fs::remove_file(&out);
+    let mut child = Command::new(env!("CARGO_BIN_EXE_patchwork"))
+        .arg("view")
+        .arg(common::root().join("models/as1-oc-214.stp"))
+        .args(["--size", "640x480", "--frames", "300", "--keys", "t"])
+        .arg("--screenshot")
+        .arg(&out)
+        .env("DISPLAY", &display.name)
+        .env_remove("WAYLAND_DISPLAY")
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("patchwork runs");
+    let dark = |c: [u8; 3]| c.iter().all(|&v| v < 60);
+    let start = std::time::Instant::now();
+    let mut screen = None;
+    while start.elapsed() < std::time::Duration::from_secs(60) {
+        std::thread::sleep(std::time::Duration::from_millis(300));
+        if let Some((w, h, px)) = capture_root(&display)
+            && w >= 640
+            && h >= 480
+        {
+            let panel = (0..480)
+                .flat_map(|y| (0..240).map(move |x| (x, y)))
+                .filter(|&(x, y)| dark(px[y * w + x]))
+                .count();
+            // The model shows right of the panel too (the frame reached the window).
+            let model = (0..480)
+                .flat_map(|y| (240..640).map(move |x| (x, y)))
+                .filter(|&(x, y)| px[y * w + x] != [255, 255, 255] && !dark(px[y * w + x]))
+                .count();
+            if panel > 240 * 480 * 8 / 10 && model > 5_000 {
+                screen = Some((w, px));
+                break;
+            }
+        }
+    }
+    let status = child.wait().expect("viewer exits");
+    assert!(status.success());
+    let (w, px) = screen.expect("the panel never showed in the window");
+    let mut img = image::RgbImage::new(640, 480);
+    for (x, y, p) in img.enumerate_pixels_mut() {
+        p.0 = px[y as usize * w + x as usize];
+    }
+    let saved = common::scratch("viewer").join("panel-window.png");
+    img.save(&saved).expect("scratch is writable");
+    let shot = image::open(&out).expect("screenshot").to_rgba8();
+    let differs = |x: usize, y: usize| {
+        let (a, b) = (px[y * w + x], shot.get_pixel(x as u32, y as u32).0);
+        (0..3).any(|k| a[k].abs_diff(b[k]) > 2)
+    };
+    let in_panel = (0..480)
+        .flat_map(|y| (0..240).map(move |x| (x, y)))
+        .filter(|&(x, y)| differs(x, y))
+        .count();
+    let outside = (0..480)
+        .flat_map(|y| (240..640).map(move |x| (x, y)))
+        .filter(|&(x, y)| differs(x, y))
+        .count();
+    assert!(
+        in_panel > 240 * 480 * 9 / 10,
+        "{in_panel} panel pixels differ from the frame ({})",
+        saved.display()
+    );
+    assert!(
+        outside < 400 * 480 / 100,
+        "{outside} pixels right of the panel differ from the frame ({})",
+        saved.display()
+    );
+}
+
+/// Pixels that are not the white background.
+fn covered(img: &image::RgbaImage) -> usize {
+    img.pixels()
+        .filter(|p| [p.0[0], p.0[1], p.0[2]] != [255, 255, 255])
+        .count()
+}
+
+/// Unchecking `plate_1` in the panel (a scripted click on its checkbox, through egui) draws
+/// the assembly without the plate: the same image as `part:10` (the panel's own hook),
+/// far fewer pixels covered than with every part; `isolate` keeps only the plate.
+#[test]
+fn unchecking_a_part_in_the_panel_hides_it() {
+    let display = Display::open();
+    let all = view_assembly(&display, "panel-all", 5, "t");
+    let clicked = view_assembly(&display, "panel-uncheck", 5, "t,z,click:15:160");
+    let hooked = view_assembly(&display, "panel-part10", 5, "t,z,part:10");
+    let (a, c) = (covered(&all), covered(&clicked));
+    assert!(
+        c * 10 < a * 7,
+        "the plate hidden: {c} pixels covered, {a} with every part"
+    );
+    assert!(
+        differing(&clicked, &hooked) < 0.001,
+        "click and part:10 differ in {:.2} % of the pixels",
+        differing(&clicked, &hooked) * 100.0
+    );
+    // `isolate` on the plate's row: the plate alone, which covers less than all but far
+    // more than the rest without it.
+    let isolated = view_assembly(&display, "panel-isolate", 5, "t,z,click:100:160");
+    let i = covered(&isolated);
+    assert!(i < a && i > a - c, "isolated {i}, all {a}, without {c}");
+}
+
+/// The explode slider (a scripted click near its right end) moves the parts apart: what
+/// they cover spreads wider and taller, and `explode:0` is the assembled picture.
+#[test]
+fn the_explode_slider_moves_the_parts() {
+    let display = Display::open();
+    let assembled = view_assembly(&display, "explode-0", 5, "t");
+    let exploded = view_assembly(&display, "explode-click", 5, "t,z,click:60:59");
+    let back = view_assembly(&display, "explode-back", 6, "t,z,click:60:59,z,explode:0");
+    let (a, e) = (extent(&assembled), extent(&exploded));
+    assert!(
+        e.0 > a.0 * 5 / 4 && e.1 > a.1 * 5 / 4,
+        "exploded {e:?}, assembled {a:?}"
+    );
+    assert!(
+        differing(&assembled, &back) < 0.001,
+        "back at 0: {:.2} % differ",
+        differing(&assembled, &back) * 100.0
+    );
+}
+
+/// Without `--section`, `c` cuts the model with a plane through its centre facing the
+/// viewer (capped: the cut shows the model's colours, no hole to the background); `]`
+/// moves it along its normal (less cut away), `c` again removes it.
+#[test]
+fn the_c_key_cuts_the_model_and_brackets_move_the_plane() {
+    let display = Display::open();
+    let plain = view(&display, "cut-plain", 6, "");
+    let cut = view(&display, "cut-c", 6, "c");
+    let moved = view(&display, "cut-moved", 8, "c,],]");
+    let removed = view(&display, "cut-removed", 6, "c,c");
+    let d = differing(&plain, &cut);
+    assert!(d > 0.05, "c changed {:.1} % of the pixels", d * 100.0);
+    let m = differing(&cut, &moved);
+    assert!(
+        m > 0.01,
+        "] moved the cut by {:.2} % of the pixels",
+        m * 100.0
+    );
+    // The cap: the cut teapot covers (nearly) what the whole one covers.
+    let (p, c) = (covered(&plain), covered(&cut));
+    assert!(c * 10 > p * 8, "cut covers {c} pixels, whole {p}");
+    let r = differing(&plain, &removed);
+    assert!(r < 0.002, "c, c: {:.2} % differ", r * 100.0);
+}
+
+/// What the panel hides is not in the drawn scene (`Panel::shown`: no patch of a hidden
+/// instance, so neither its surfaces nor its fat borders nor its edges are drawn), and what
+/// stays is drawn crack-free: the crack check over random views of the assembly without
+/// its plate and one bracket assembly, coloured by part.
+#[test]
+fn hidden_parts_leave_the_drawn_scene_which_stays_crack_free() {
+    use patchwork::check::{CheckOptions, run_check};
+    let full = common::load("as1-oc-214.stp");
+    let mut panel = patchwork::viewer::Panel::new(&full);
+    panel.toggle(10);
+    for i in 11..=17 {
+        panel.toggle(i);
+    }
+    panel.colour_by_part = true;
+    let shown = panel.shown(&full);
+    let hidden = |p: &patchwork::model::Patch| p.instance == 10 || p.instance >= 11;
+    let kept = full.patches.iter().filter(|p| !hidden(p)).count();
+    assert_eq!(shown.patches.len(), kept);
+    assert!(kept > 0 && kept < full.patches.len());
+    assert!(shown.patches.iter().all(|p| !hidden(p)));
+    assert!(
+        shown
+            .patches
+            .iter()
+            .all(|p| p.color == Some(patchwork::viewer::part_colour(p.part)))
+    );
+    let mut renderer = common::renderer();
+    let opts = CheckOptions {
+        views: 6,
+        save_failures: Some(common::scratch("viewer-hidden-cracks")),
+        ..CheckOptions::default()
+    };
+    let r = run_check(&mut renderer, &shown, &opts, |_| {}).expect("rendering works");
+    assert!(
+        r.crack_free(),
+        "{:?}",
+        r.total(patchwork::render::FatBorders::Six)
     );
 }

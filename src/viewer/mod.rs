@@ -30,6 +30,7 @@ use winit::dpi::{PhysicalPosition, PhysicalSize};
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
 use winit::keyboard::{Key, NamedKey};
+
 use winit::window::{Window, WindowId};
 
 use crate::frame::{FrameState, StepOptions};
@@ -42,12 +43,19 @@ use crate::view::{Framing, Projection, View};
 
 mod orbit;
 mod overlay;
+mod panel;
 mod pick;
 mod present;
+mod script;
+mod section;
+mod shown;
 
 pub use orbit::Orbit;
 pub use overlay::draw_wireframe;
+pub use panel::{EXPLODE_DISTANCE, PANEL_WIDTH, Panel, part_colour, tree};
+use panel::{Exploded, PanelUi};
 use present::Present;
+pub use script::{Scripted, script_input, script_key};
 
 /// Why the viewer could not run.
 #[derive(Debug, Error)]
@@ -88,7 +96,9 @@ Keys:  arrows orbit, PageUp / PageDown zoom, f fit to view, 5 orthographic / per
        i patch-ID colours,
        h screen-error heat map (blue finer than asked, green on target, red coarser),
        + / - pixel error x2 / /2, p screenshot, space play / pause (--implode),
-       c section planes on / off (--section),
+       c section plane on / off (through the centre, facing you; or the --section planes),
+       ctrl + drag or [ / ] move it along its normal,
+       t part panel (visibility, isolate, colour by part, explode slider),
        ? these lines, q or Esc quit.
 Title: frames per second, triangles, re-tessellation queue, largest screen error.";
 
@@ -110,7 +120,7 @@ pub struct ViewerOptions {
     pub frames: Option<usize>,
     /// Written at exit (scripted) or with `p`.
     pub screenshot: Option<PathBuf>,
-    /// Keys pressed by script, one per frame from the first (names as in [`script_key`]).
+    /// Keys pressed by script, one per frame from the first (names as in [`script_input`]).
     pub keys: Vec<String>,
     /// Play an implosion/explosion loop (space pauses and resumes).
     pub implode: Option<ViewerAnimation>,
@@ -164,23 +174,6 @@ impl Playing {
             1.0
         }
     }
-}
-
-/// The key a script name stands for: a character (`b`, `w`, `+`…) or `left`, `right`, `up`,
-/// `down`, `pageup`, `pagedown`, `escape`.
-pub fn script_key(name: &str) -> Option<Key> {
-    Some(match name {
-        "left" => Key::Named(NamedKey::ArrowLeft),
-        "right" => Key::Named(NamedKey::ArrowRight),
-        "up" => Key::Named(NamedKey::ArrowUp),
-        "down" => Key::Named(NamedKey::ArrowDown),
-        "pageup" => Key::Named(NamedKey::PageUp),
-        "pagedown" => Key::Named(NamedKey::PageDown),
-        "escape" => Key::Named(NamedKey::Escape),
-        "space" => Key::Named(NamedKey::Space),
-        c if c.chars().count() == 1 => Key::Character(c.into()),
-        _ => return None,
-    })
 }
 
 /// What a session did.
@@ -237,8 +230,16 @@ pub fn run_upgrading(
     };
     let ortho = options.framing.ortho;
     let edges = options.edges;
+    let panel = Panel::new(&scene);
+    let exploded = Exploded::new(&scene);
+    let cut = options.sections;
     let mut app = App {
+        full: scene.clone(),
         scene,
+        panel,
+        exploded,
+        cut,
+        ctrl: false,
         upgrade,
         playing,
         options,
@@ -285,7 +286,16 @@ pub fn run_upgrading(
 }
 
 struct App {
+    /// The scene drawn: the loaded one less the parts the panel hides ([`Panel::shown`]).
     scene: Scene,
+    /// The loaded scene (the upgraded one once it arrived).
+    full: Scene,
+    panel: Panel,
+    /// The explode slider's offsets over the drawn scene.
+    exploded: Exploded,
+    /// The section planes (`--section`, or the one `c` makes; ctrl + drag moves the first).
+    cut: crate::render::Sections,
+    ctrl: bool,
     /// Where a better scene may come from (see [`run_upgrading`]).
     upgrade: Option<std::sync::mpsc::Receiver<Scene>>,
     /// The implosion loop, with `--implode`.
@@ -330,6 +340,7 @@ struct State {
     present: Present,
     frame: FrameState,
     last: Option<Frame>,
+    ui: PanelUi,
 }
 
 impl App {
@@ -381,6 +392,7 @@ impl App {
         config.view_formats.clear();
         surface.configure(&gpu.device, &config);
         let present = Present::new(&gpu.device, format);
+        let ui = PanelUi::new(&window, &gpu, format);
         let mut renderer = Renderer::with_gpu(gpu)?;
         renderer.primitives = self.options.primitives;
         (self.options.notify)(&format!("adapter: {}", renderer.gpu().describe()));
@@ -394,6 +406,7 @@ impl App {
             present,
             frame,
             last: None,
+            ui,
         })
     }
 
@@ -415,13 +428,18 @@ impl App {
         else {
             return Ok(false);
         };
+        let start = Instant::now();
+        self.panel_pass();
         let view = self.view(w, h);
         let Some(state) = self.state.as_mut() else {
             return Ok(false);
         };
-        let start = Instant::now();
-        // Animated: patches drawn moved, tessellated for where they are drawn.
-        let offsets = self.playing.as_ref().map(|p| p.explosion.at(p.amount()));
+        // Animated or exploded by the panel's slider: patches drawn moved, tessellated for
+        // where they are drawn.
+        let offsets = match self.playing.as_ref() {
+            Some(p) => Some(p.explosion.at(p.amount())),
+            None => self.exploded.offsets(self.panel.explode),
+        };
         let opts = StepOptions {
             draw: RenderOptions {
                 shading: self.shading,
@@ -429,7 +447,7 @@ impl App {
                 msaa: 1,
                 depth: self.wireframe,
                 sections: if self.sections_on {
-                    self.options.sections
+                    self.cut
                 } else {
                     crate::render::Sections::NONE
                 },
@@ -456,6 +474,10 @@ impl App {
             | wgpu::CurrentSurfaceTexture::Suboptimal(t) => {
                 let target = t.texture.create_view(&Default::default());
                 state.present.draw(state.renderer.gpu(), &frame, &target);
+                if self.panel.open {
+                    let size = (state.config.width, state.config.height);
+                    state.ui.paint(state.renderer.gpu(), &target, size);
+                }
                 state.window.pre_present_notify();
                 state.renderer.gpu().queue.present(t);
                 self.presented += 1;
@@ -544,6 +566,7 @@ impl App {
                     self.options.fov_y,
                     size,
                 );
+                self.pan_for_panel(1.0);
             }
             Key::Character("b") => {
                 self.fat_borders = match self.fat_borders {
@@ -555,7 +578,10 @@ impl App {
             }
             Key::Character("e") => self.edges = self.edges.next(),
             Key::Character("w") => self.wireframe = !self.wireframe,
-            Key::Character("c") => self.sections_on = !self.sections_on,
+            Key::Character("c") => self.toggle_section(),
+            Key::Character("[") => self.step_section(-1.0),
+            Key::Character("]") => self.step_section(1.0),
+            Key::Character("t") => self.toggle_panel(),
             Key::Character("5") => self.ortho = !self.ortho,
             Key::Named(NamedKey::Space) => {
                 if let Some(p) = self.playing.as_mut() {
@@ -610,17 +636,8 @@ impl App {
         if let Some(p) = self.playing.as_ref() {
             scene.bounds = p.explosion.bounds(&scene);
         }
-        self.scene = scene;
-        let size = self
-            .state
-            .as_ref()
-            .map(|s| (s.config.width, s.config.height));
-        if let Some((w, h)) = size {
-            let view = self.view(w, h);
-            if let Some(s) = self.state.as_mut() {
-                s.frame = FrameState::new(&self.scene, &view, s.frame.lod.options);
-            }
-        }
+        self.full = scene;
+        self.reshow();
         (self.options.notify)("hierarchies ready: now drawing level-of-detail cuts");
         self.dirty = true;
         false
@@ -647,6 +664,9 @@ impl ApplicationHandler for App {
     }
 
     fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
+        if self.give_panel(&event) {
+            return;
+        }
         match event {
             WindowEvent::CloseRequested => event_loop.exit(),
             WindowEvent::Resized(size) => {
@@ -660,7 +680,10 @@ impl ApplicationHandler for App {
                     self.dirty = true;
                 }
             }
-            WindowEvent::ModifiersChanged(m) => self.shift = m.state().shift_key(),
+            WindowEvent::ModifiersChanged(m) => {
+                self.shift = m.state().shift_key();
+                self.ctrl = m.state().control_key();
+            }
             WindowEvent::KeyboardInput { event, .. } if event.state == ElementState::Pressed => {
                 self.key(event.logical_key, event_loop)
             }
@@ -673,6 +696,10 @@ impl ApplicationHandler for App {
                 self.cursor = position;
                 let height = self.state.as_ref().map_or(1, |s| s.config.height);
                 match self.drag {
+                    Some(_) if self.ctrl => {
+                        self.drag_section(dy, height);
+                        self.dirty = true;
+                    }
                     Some(MouseButton::Left) if !self.shift => {
                         self.orbit.rotate(-dx * 0.01, dy * 0.01);
                         self.dirty = true;
@@ -694,8 +721,8 @@ impl ApplicationHandler for App {
             }
             WindowEvent::RedrawRequested => {
                 if let Some(name) = self.options.keys.get(self.frames).cloned() {
-                    match script_key(&name) {
-                        Some(k) => self.key(k, event_loop),
+                    match script_input(&name) {
+                        Some(s) => self.scripted(s, event_loop),
                         None => {
                             let why = format!("unknown key {name:?} in the script");
                             return self.fail(event_loop, ViewerError::Surface(why));

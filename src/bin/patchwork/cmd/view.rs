@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use clap::Args;
 
 use patchwork::anim::GroupBy;
-use patchwork::viewer::{ViewerAnimation, ViewerOptions, script_key};
+use patchwork::viewer::{ViewerAnimation, ViewerOptions, script_input};
 
 use crate::args::{
     BudgetArgs, CameraArgs, EdgesArg, PrimitivesArg, at_least, distance, lod_options,
@@ -37,7 +37,8 @@ pub struct ViewArgs {
     screenshot: Option<PathBuf>,
     /// With --frames: keys pressed one per frame from the first, comma-separated
     /// (e.g. `h,+` or `b,b,w`; names: characters, left, right, up, down, pageup, pagedown,
-    /// space).
+    /// space; the part panel: `click:X:Y` a click at a window pixel, `part:N` instance N
+    /// shown / hidden, `explode:F` the explode slider at F in [0, 1]).
     #[arg(long, requires = "frames", value_delimiter = ',')]
     keys: Vec<String>,
     /// Play an implosion/explosion loop (space pauses and resumes).
@@ -70,7 +71,7 @@ pub fn run(args: &ViewArgs) -> Result<(), CliError> {
         .transpose()?;
     let distance = distance(args.distance)?;
     let sections = args.section.validate()?;
-    if let Some(k) = args.keys.iter().find(|k| script_key(k).is_none()) {
+    if let Some(k) = args.keys.iter().find(|k| script_input(k).is_none()) {
         return Err(CliError::UnknownKey { key: k.clone() });
     }
     if let Some(n) = frames
