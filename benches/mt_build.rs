@@ -1,5 +1,6 @@
 //! Build speed of the MT hierarchies (issue 30 item 4): `cargo bench --bench mt_build [--
-//! [--rounds N] FILE...]` (default `models/bunny.glb`, `alien.glb` and `cakeBirthday.glb`). For each mesh, welded
+//! [--rounds N] FILE...]` (default `models/bunny.glb`, `alien.glb`, `cakeBirthday.glb` and a generated bumpy torus of
+//! 48 000 triangles). For each mesh, welded
 //! and partitioned as the loader does, it times build + reduce of every patch's hierarchy
 //! (`MeshPatch::build_hierarchy`, what loading runs) on rayon and on one thread, best of
 //! `--rounds` (default 3), in triangles per second, and beside it meshopt 0.7's one-level `simplify` of the
@@ -11,7 +12,7 @@
 use std::fmt::Write as _;
 use std::time::Instant;
 
-use patchwork::model::mesh::MeshPatch;
+use patchwork::model::mesh::{MeshPatch, TriMesh};
 use patchwork::mt::DEFAULT_ARC_SIZE;
 use rayon::prelude::*;
 
@@ -33,7 +34,8 @@ fn main() {
             files.push(a);
         }
     }
-    if files.is_empty() {
+    let default = files.is_empty();
+    if default {
         let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/models");
         files = vec![
             format!("{dir}/bunny.glb"),
@@ -49,12 +51,24 @@ fn main() {
          |---|---|---|---|---|---|---|---|---|---|---|",
         rayon::current_num_threads()
     );
-    for path in &files {
-        let patchwork::io::Model::Mesh(mut mesh) =
-            patchwork::io::read(std::path::Path::new(path)).expect("the model loads")
-        else {
-            panic!("{path} is not a triangle mesh");
-        };
+    let mut meshes: Vec<(String, TriMesh)> = files
+        .iter()
+        .map(|path| {
+            let patchwork::io::Model::Mesh(mesh) =
+                patchwork::io::read(std::path::Path::new(path)).expect("the model loads")
+            else {
+                panic!("{path} is not a triangle mesh");
+            };
+            let name = std::path::Path::new(path)
+                .file_name()
+                .map_or(path.clone(), |f| f.to_string_lossy().into_owned());
+            (name, mesh)
+        })
+        .collect();
+    if default {
+        meshes.push(("bumpy torus (generated)".into(), bumpy_torus(240, 100)));
+    }
+    for (name, mut mesh) in meshes {
         mesh.weld();
         let parts: Vec<MeshPatch> =
             patchwork::prep::partition(&mesh, patchwork::prep::DEFAULT_PATCH_TRIANGLES);
@@ -120,9 +134,6 @@ fn main() {
                     .to_string()
             })
             .collect();
-        let name = std::path::Path::new(path)
-            .file_name()
-            .map_or(path.clone(), |f| f.to_string_lossy().into_owned());
         let _ = writeln!(
             out,
             "| {name} | {n} | {} | {rayon_s:.3} | {:.3} | {one_s:.3} | {:.3} | {} | {:.2} | {} | {:016x} |",
@@ -149,6 +160,35 @@ fn main() {
     let target = dir.join("mt_build.md");
     if let Err(e) = std::fs::write(&target, &out) {
         eprintln!("could not write {}: {e}", target.display());
+    }
+}
+
+/// A torus (radii 1 and 0.35) with bumps on its tube, `u` × `v` quads split in two: a
+/// second, curved closed mesh of a size between the bunny's and the small glTF files'.
+fn bumpy_torus(u: u32, v: u32) -> TriMesh {
+    use std::f32::consts::TAU;
+    let mut positions = Vec::new();
+    for i in 0..u {
+        for j in 0..v {
+            let (a, b) = (TAU * i as f32 / u as f32, TAU * j as f32 / v as f32);
+            let r = 0.35 * (1.0 + 0.15 * (7.0 * a).sin() * (5.0 * b).sin());
+            let ring = 1.0 + r * b.cos();
+            positions.push(glam::Vec3::new(ring * a.cos(), ring * a.sin(), r * b.sin()));
+        }
+    }
+    let id = |i: u32, j: u32| (i % u) * v + (j % v);
+    let mut triangles = Vec::new();
+    for i in 0..u {
+        for j in 0..v {
+            let (p, q, r, s) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+            triangles.push([p, q, r]);
+            triangles.push([p, r, s]);
+        }
+    }
+    TriMesh {
+        positions,
+        triangles,
+        ..TriMesh::default()
     }
 }
 
