@@ -1,13 +1,15 @@
-//! Build speed of the MT hierarchies (issue 30 item 4): `cargo bench --bench mt_build [--
-//! [--rounds N] FILE...]` (default `models/bunny.glb`, `alien.glb`, `cakeBirthday.glb` and a generated bumpy torus of
-//! 48 000 triangles). For each mesh, welded
-//! and partitioned as the loader does, it times build + reduce of every patch's hierarchy
-//! (`MeshPatch::build_hierarchy`, what loading runs) on rayon and on one thread, best of
-//! `--rounds` (default 3), in triangles per second, and beside it meshopt 0.7's one-level `simplify` of the
-//! whole mesh to half its triangles in the same run, so the ratio can be read. It also prints
-//! the triangles the reduced cuts draw at 0.5, 1 and 2 % of the bounding-box diagonal (what
-//! the speed must not cost) and the thread CPU time of the one-thread run (less inflated than
-//! wall time on a shared machine). Writes `target/mt_build.md`.
+//! Build speed of the MT hierarchies (issue 30 item 4):
+//! `cargo bench --bench mt_build [-- [--rounds N] FILE...]` (default `models/bunny.glb`,
+//! `alien.glb`, `cakeBirthday.glb` and a generated bumpy torus of 48 000 triangles). For each
+//! mesh, welded and partitioned as the loader does, it times build + reduce of every patch's
+//! hierarchy (`MeshPatch::build_hierarchy`, what loading runs) on rayon and on one thread, best
+//! of `--rounds` (default 3), in triangles per second, and beside it meshopt 0.7's one-level
+//! `simplify` of the whole mesh to half its triangles in the same run, so the ratio can be
+//! read. It also prints the triangles the reduced cuts draw at 0.5, 1 and 2 % of the
+//! bounding-box diagonal (what the speed must not cost), the thread CPU time of the one-thread
+//! run (less inflated than wall time on a shared machine) and a fingerprint of the hierarchies
+//! (equal: identical hierarchies, so an exact speed-up shows as such). Writes `mt_build.md` in
+//! the target directory.
 
 use std::fmt::Write as _;
 use std::time::Instant;
