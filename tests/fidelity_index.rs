@@ -35,8 +35,10 @@ fn framing(scene: &Scene) -> View {
 #[test]
 fn indexed_boundary_queries_give_the_exhaustive_figures_bit_for_bit() {
     for file in MODELS {
+        let t0 = std::time::Instant::now();
         let scene = common::load(file);
-        let meshes = tessellate_scene(&scene, &framing(&scene), DEFAULT_PIXEL_ERROR);
+        // The OCCT judge's tolerance (3e-3 of the diagonal): few enough samples for the scan.
+        let meshes = tessellate_scene_tolerance(&scene, 3e-3 * scene.bbox_diagonal());
         let mut measured = 0;
         for (p, mesh) in scene.patches.iter().zip(&meshes) {
             let PatchSurface::Trimmed(face) = &p.surface else {
@@ -53,6 +55,10 @@ fn indexed_boundary_queries_give_the_exhaustive_figures_bit_for_bit() {
             measured += usize::from(scan.is_some());
         }
         assert!(measured > 0, "{file}: no trimmed face measured");
+        eprintln!(
+            "{file}: {measured} faces, {:.1} s",
+            t0.elapsed().as_secs_f64()
+        );
     }
 }
 
@@ -92,7 +98,7 @@ fn placements_sharing_a_mesh_are_measured_once_with_their_own_figures() {
         ),
         (
             "the view",
-            tessellate_scene(&scene, &framing(&scene), DEFAULT_PIXEL_ERROR),
+            tessellate_scene(&scene, &framing(&scene), 4.0 * DEFAULT_PIXEL_ERROR),
             1e-9,
         ),
     ];

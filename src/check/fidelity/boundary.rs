@@ -476,8 +476,8 @@ impl Boundary {
         }
         let mut best: Option<(f64, DVec2)> = None;
         for (li, lp) in self.loops.iter().enumerate() {
-            for si in 0..lp.len().saturating_sub(1) {
-                if lp[si].2 {
+            for (si, w) in lp.windows(2).enumerate() {
+                if w[0].2 {
                     continue;
                 }
                 let (d, t) = at((li, si));
@@ -508,8 +508,8 @@ impl Boundary {
         let scan = || {
             let mut best: Option<(f64, usize, usize, f64, DVec2)> = None;
             for (li, lp) in self.loops.iter().enumerate() {
-                for si in 0..lp.len().saturating_sub(1) {
-                    if lp[si].2 {
+                for (si, w) in lp.windows(2).enumerate() {
+                    if w[0].2 {
                         continue;
                     }
                     let (d2, t, q) = self.side_distance(uv, (li, si));
@@ -569,9 +569,7 @@ impl Boundary {
         ix.side
             .nearest(copy(first).to_array(), &mut key, |x| x * x, &mut best);
         if step != DVec2::ZERO {
-            let Some((d2, _)) = best else {
-                return None;
-            };
+            let (d2, _) = best?;
             let reach = d2.sqrt() * (1.0 + 1e-9) + ix.side.slack();
             let Some(((u0, u1), (v0, v1))) = copies(reach) else {
                 return scan();

@@ -119,8 +119,8 @@ impl<const D: usize> BoxGrid<D> {
 
     fn index(&self, c: [usize; D]) -> usize {
         let mut k = 0;
-        for i in 0..D {
-            k = k * self.dims[i] + c[i];
+        for (i, ci) in c.into_iter().enumerate() {
+            k = k * self.dims[i] + ci;
         }
         k
     }
@@ -161,8 +161,8 @@ impl<const D: usize> BoxGrid<D> {
     /// Distance from `q` to the grid's box (0 inside).
     pub(super) fn box_distance(&self, q: [f64; D]) -> f64 {
         let mut s = 0.0;
-        for i in 0..D {
-            let d = (self.lo[i] - q[i]).max(q[i] - self.hi[i]).max(0.0);
+        for (i, qi) in q.into_iter().enumerate() {
+            let d = (self.lo[i] - qi).max(qi - self.hi[i]).max(0.0);
             s += d * d;
         }
         s.sqrt()
