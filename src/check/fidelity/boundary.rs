@@ -2,6 +2,7 @@
 //! edge curves at ε/16, unwrapped onto one sheet (seams and pole lines are not boundary), and
 //! the inside test (side of the nearest non-seam segment, or even-odd where the loops allow).
 
+use super::segment_index::{BoxGrid, Buckets};
 use super::*;
 
 /// The face's trim loops, rebuilt from the edge curves: 3D polylines and their unwrapped
@@ -23,6 +24,24 @@ pub(super) struct Boundary {
     /// Pole lines across which the surface folds onto itself, with the side (±1 along the
     /// fixed parameter) the loops lie on.
     sheets: Vec<(Pole, f64)>,
+    /// The segments indexed for the queries (`segment_index`); `None`: every query scans every
+    /// segment (the reference the index is tested against, and loops with non-finite points).
+    index: Option<SegmentIndex>,
+}
+
+/// The boundary's segments in the spatial indices of `segment_index`.
+#[derive(Debug)]
+struct SegmentIndex {
+    /// Per indexed item: (loop, segment), in loop order (ties go to the first, as a scan's).
+    all: Vec<(usize, usize)>,
+    /// The non-seam segments, in loop order.
+    sides: Vec<(usize, usize)>,
+    /// `sides` by their 3D boxes.
+    near: BoxGrid<3>,
+    /// `sides` by their boxes in parameter space scaled by `metric`.
+    side: BoxGrid<2>,
+    /// `all` by their extent along even-odd's crossing axis.
+    parity: Buckets,
 }
 
 impl poles::LoopPoint for (DVec3, DVec2, bool) {
@@ -235,14 +254,84 @@ impl Boundary {
         let ray_middle = ray_period
             .filter(|p| *p > 0.0 && lo.is_finite() && hi.is_finite())
             .map(|p| (0.5 * (lo + hi), p));
-        Boundary {
+        let mut out = Boundary {
             loops,
             periods,
             metric,
             wraps,
             sheets,
             ray_middle,
+            index: None,
+        };
+        out.index = out.build_index();
+        out
+    }
+
+    /// The same boundary answering every query by scanning every segment.
+    pub(super) fn exhaustive(mut self) -> Boundary {
+        self.index = None;
+        self
+    }
+
+    /// The spatial indices over the segments; `None` when a loop point is not finite (the
+    /// scan's answers then depend on segment order in ways no index keeps).
+    fn build_index(&self) -> Option<SegmentIndex> {
+        let finite = self
+            .loops
+            .iter()
+            .flatten()
+            .all(|(p, uv, _)| p.is_finite() && uv.is_finite());
+        if !finite || !(self.metric.is_finite()) {
+            return None;
         }
+        let mut all = Vec::new();
+        let mut sides = Vec::new();
+        for (li, lp) in self.loops.iter().enumerate() {
+            for (si, w) in lp.windows(2).enumerate() {
+                all.push((li, si));
+                if !w[0].2 {
+                    sides.push((li, si));
+                }
+            }
+        }
+        let ends = |&(li, si): &(usize, usize)| (self.loops[li][si], self.loops[li][si + 1]);
+        let near: Vec<([f64; 3], [f64; 3])> = sides
+            .iter()
+            .map(|s| {
+                let (a, b) = ends(s);
+                (a.0.min(b.0).to_array(), a.0.max(b.0).to_array())
+            })
+            .collect();
+        let side: Vec<([f64; 2], [f64; 2])> = sides
+            .iter()
+            .map(|s| {
+                let (a, b) = ends(s);
+                let (a, b) = (a.1 * self.metric, b.1 * self.metric);
+                (a.min(b).to_array(), a.max(b).to_array())
+            })
+            .collect();
+        let (c, period) = self.parity_axes();
+        let extents: Vec<(f64, f64)> = all
+            .iter()
+            .map(|s| {
+                let (a, b) = ends(s);
+                (a.1[c], b.1[c])
+            })
+            .collect();
+        Some(SegmentIndex {
+            near: BoxGrid::new(&near),
+            side: BoxGrid::new(&side),
+            parity: Buckets::new(&extents, period),
+            all,
+            sides,
+        })
+    }
+
+    /// Even-odd's crossing axis `c` (taken modulo its period, if any); the ray runs along the
+    /// other.
+    fn parity_axes(&self) -> (usize, Option<f64>) {
+        let (pu, pv) = self.periods;
+        if pu.is_some() { (0, pu) } else { (1, pv) }
     }
 
     /// `uv` moved onto the sheet the loops lie on, where the surface covers itself twice (a
@@ -284,29 +373,40 @@ impl Boundary {
     /// Even-odd over the loops (meaningful when no loop runs around the surface).
     pub(super) fn inside_by_parity(&self, mut uv: DVec2) -> bool {
         // The ray runs along `r`, crossings are found on `c` (taken modulo its period, if any).
-        let (pu, pv) = self.periods;
-        let (c, r, period) = if pu.is_some() { (0, 1, pu) } else { (1, 0, pv) };
+        let (c, period) = self.parity_axes();
+        let r = 1 - c;
         // Periodic along the ray too: the sample within half a period of the loops' middle.
         if let Some((mid, p)) = self.ray_middle {
             uv[r] -= ((uv[r] - mid) / p).round() * p;
         }
+        let crosses = |(li, si): (usize, usize)| {
+            let lp = &self.loops[li];
+            let (mut a, mut b) = (lp[si].1, lp[si + 1].1);
+            let qc = uv[c];
+            // The segment moved by whole periods next to the sample (not the sample next
+            // to each segment: a sample on the seam, u = −1e-17, rounded to 2π against
+            // the last segment and to −1e-17 against the first, and crossed neither).
+            if let Some(p) = period.filter(|p| *p > 0.0) {
+                let k = ((0.5 * (a[c] + b[c]) - qc) / p).round() * p;
+                a[c] -= k;
+                b[c] -= k;
+            }
+            if (a[c] > qc) != (b[c] > qc) {
+                let t = (qc - a[c]) / (b[c] - a[c]);
+                return a[r] + t * (b[r] - a[r]) > uv[r];
+            }
+            false
+        };
         let mut odd = false;
-        for lp in &self.loops {
-            for w in lp.windows(2) {
-                let (mut a, mut b) = (w[0].1, w[1].1);
-                let qc = uv[c];
-                // The segment moved by whole periods next to the sample (not the sample next
-                // to each segment: a sample on the seam, u = −1e-17, rounded to 2π against
-                // the last segment and to −1e-17 against the first, and crossed neither).
-                if let Some(p) = period.filter(|p| *p > 0.0) {
-                    let k = ((0.5 * (a[c] + b[c]) - qc) / p).round() * p;
-                    a[c] -= k;
-                    b[c] -= k;
-                }
-                if (a[c] > qc) != (b[c] > qc) {
-                    let t = (qc - a[c]) / (b[c] - a[c]);
-                    if a[r] + t * (b[r] - a[r]) > uv[r] {
-                        odd = !odd;
+        match &self.index {
+            // Crossings only toggle: the order the segments are tested in does not matter.
+            Some(ix) => ix
+                .parity
+                .each(uv[c], |k| odd ^= crosses(ix.all[k as usize])),
+            None => {
+                for (li, lp) in self.loops.iter().enumerate() {
+                    for si in 0..lp.len().saturating_sub(1) {
+                        odd ^= crosses((li, si));
                     }
                 }
             }
@@ -352,43 +452,154 @@ impl Boundary {
     /// The boundary point nearest to `p` in 3D (along the nearest segment): its distance and
     /// its parameter; `None` without boundary segments.
     pub(super) fn nearest(&self, p: DVec3) -> Option<(f64, DVec2)> {
+        // Distance from `p` to segment `si` of loop `li` in 3D, and where along it.
+        let at = |(li, si): (usize, usize)| {
+            let lp = &self.loops[li];
+            let (a, b) = (lp[si].0, lp[si + 1].0);
+            let ab = b - a;
+            let t = ((p - a).dot(ab) / ab.length_squared().max(1e-300)).clamp(0.0, 1.0);
+            ((a + ab * t).distance(p), t)
+        };
+        let param = |(li, si): (usize, usize), t: f64| {
+            let lp = &self.loops[li];
+            lp[si].1.lerp(lp[si + 1].1, t)
+        };
+        if let Some(ix) = &self.index {
+            let mut best = None;
+            let mut key = |k: u32| at(ix.sides[k as usize]).0;
+            ix.near.nearest(p.to_array(), &mut key, |x| x, &mut best);
+            return best.map(|(_, k)| {
+                let s = ix.sides[k as usize];
+                let (d, t) = at(s);
+                (d, param(s, t))
+            });
+        }
         let mut best: Option<(f64, DVec2)> = None;
-        for lp in &self.loops {
-            for w in lp.windows(2).filter(|w| !w[0].2) {
-                let (a, b) = (w[0].0, w[1].0);
-                let ab = b - a;
-                let t = ((p - a).dot(ab) / ab.length_squared().max(1e-300)).clamp(0.0, 1.0);
-                let d = (a + ab * t).distance(p);
+        for (li, lp) in self.loops.iter().enumerate() {
+            for (si, w) in lp.windows(2).enumerate() {
+                if w[0].2 {
+                    continue;
+                }
+                let (d, t) = at((li, si));
                 if best.is_none_or(|(bd, _)| d < bd) {
-                    best = Some((d, w[0].1.lerp(w[1].1, t)));
+                    best = Some((d, param((li, si), t)));
                 }
             }
         }
         best
     }
 
+    /// Squared distance in scaled parameters from `uv` (shifted by whole periods next to the
+    /// segment) to segment `si` of loop `li`, where along it, and the shifted `uv`.
+    fn side_distance(&self, uv: DVec2, (li, si): (usize, usize)) -> (f64, f64, DVec2) {
+        let scale = self.metric;
+        let lp = &self.loops[li];
+        let (a, b) = (lp[si].1, lp[si + 1].1);
+        let q = unwrap_near(uv, 0.5 * (a + b), self.periods);
+        let (a2, b2, q2) = (a * scale, b * scale, q * scale);
+        let ab = b2 - a2;
+        let t = ((q2 - a2).dot(ab) / ab.length_squared().max(1e-300)).clamp(0.0, 1.0);
+        ((a2 + ab * t).distance_squared(q2), t, q)
+    }
+
+    /// The non-seam segment nearest `uv` in scaled parameters (by [`Boundary::side_distance`]):
+    /// (distance², loop, segment, parameter along it, `uv` shifted next to it).
+    fn nearest_side(&self, uv: DVec2) -> Option<(f64, usize, usize, f64, DVec2)> {
+        let scan = || {
+            let mut best: Option<(f64, usize, usize, f64, DVec2)> = None;
+            for (li, lp) in self.loops.iter().enumerate() {
+                for (si, w) in lp.windows(2).enumerate() {
+                    if w[0].2 {
+                        continue;
+                    }
+                    let (d2, t, q) = self.side_distance(uv, (li, si));
+                    if best.is_none_or(|b| d2 < b.0) {
+                        best = Some((d2, li, si, t, q));
+                    }
+                }
+            }
+            best
+        };
+        let Some(ix) = &self.index else {
+            return scan();
+        };
+        if !uv.is_finite() {
+            return scan();
+        }
+        // The segment's distance is to `uv` shifted next to it, never nearer than the nearest
+        // of `uv`'s copies a whole period apart: each copy that can come nearer than the best
+        // so far is searched (the nearest to the grid first).
+        let q0 = uv * self.metric;
+        let periods =
+            [self.periods.0, self.periods.1].map(|p| p.filter(|p| *p > 0.0 && p.is_finite()));
+        let step = DVec2::new(
+            periods[0].map_or(0.0, |p| p * self.metric.x),
+            periods[1].map_or(0.0, |p| p * self.metric.y),
+        );
+        let mut key = |k: u32| self.side_distance(uv, ix.sides[k as usize]).0;
+        let mut best = None;
+        let (glo, ghi) = ix.side.bounds();
+        // Copies within `reach` of the grid's box along each periodic axis (`None`: too many,
+        // the loops run around many periods).
+        let copies = |reach: f64| {
+            let range = |i: usize| -> Option<(i64, i64)> {
+                if step[i] <= 0.0 {
+                    return Some((0, 0));
+                }
+                let lo = ((glo[i] - reach - q0[i]) / step[i]).ceil();
+                let hi = ((ghi[i] + reach - q0[i]) / step[i]).floor();
+                (lo.is_finite() && hi.is_finite() && hi - lo < 16.0)
+                    .then_some((lo as i64, hi as i64))
+            };
+            Some((range(0)?, range(1)?))
+        };
+        // First the copy nearest the grid.
+        let Some(((u0, u1), (v0, v1))) = copies(0.0) else {
+            return scan();
+        };
+        let first = {
+            let pick = |a: i64, b: i64, i: usize| match step[i] > 0.0 {
+                true if a <= b => a,
+                true => ((0.5 * (glo[i] + ghi[i]) - q0[i]) / step[i]).round() as i64,
+                false => 0,
+            };
+            (pick(u0, u1, 0), pick(v0, v1, 1))
+        };
+        let copy = |(ju, jv): (i64, i64)| q0 + step * DVec2::new(ju as f64, jv as f64);
+        ix.side
+            .nearest(copy(first).to_array(), &mut key, |x| x * x, &mut best);
+        if step != DVec2::ZERO {
+            let (d2, _) = best?;
+            let reach = d2.sqrt() * (1.0 + 1e-9) + ix.side.slack();
+            let Some(((u0, u1), (v0, v1))) = copies(reach) else {
+                return scan();
+            };
+            for ju in u0..=u1 {
+                for jv in v0..=v1 {
+                    if (ju, jv) == first {
+                        continue;
+                    }
+                    let q = copy((ju, jv)).to_array();
+                    let far = ix.side.box_distance(q);
+                    if best.is_some_and(|(d2, _)| far * far > d2 * (1.0 + 1e-9)) {
+                        continue;
+                    }
+                    ix.side.nearest(q, &mut key, |x| x * x, &mut best);
+                }
+            }
+        }
+        best.map(|(_, k)| {
+            let (li, si) = ix.sides[k as usize];
+            let (d2, t, q) = self.side_distance(uv, (li, si));
+            (d2, li, si, t, q)
+        })
+    }
+
     /// Whether `uv` lies on the face's side of the nearest boundary segment.
     pub(super) fn inside_by_side(&self, face: &TrimmedFace, uv: DVec2) -> bool {
         let scale = self.metric;
         // Nearest segment: (distance², loop, segment, parameter along it, uv shifted).
-        let mut best: Option<(f64, usize, usize, f64, DVec2)> = None;
-        for (li, lp) in self.loops.iter().enumerate() {
-            for (si, w) in lp.windows(2).enumerate() {
-                if w[0].2 {
-                    continue;
-                }
-                let (a, b) = (w[0].1, w[1].1);
-                let q = unwrap_near(uv, 0.5 * (a + b), self.periods);
-                let (a2, b2, q2) = (a * scale, b * scale, q * scale);
-                let ab = b2 - a2;
-                let t = ((q2 - a2).dot(ab) / ab.length_squared().max(1e-300)).clamp(0.0, 1.0);
-                let d2 = (a2 + ab * t).distance_squared(q2);
-                if best.is_none_or(|b| d2 < b.0) {
-                    best = Some((d2, li, si, t, q));
-                }
-            }
-        }
-        let Some((_, li, si, t, q)) = best else {
+        let Some((_, li, si, t, q)) = self.nearest_side(uv) else {
             return true;
         };
         let lp = &self.loops[li];
