@@ -15,7 +15,7 @@
 //! Reading checks everything before trusting it: magic, version, key, the payload's length
 //! against the file's and its hash (a flipped bit or a truncated file is refused), every count
 //! against the bytes left before allocating, the patch count and vertex counts against the
-//! patches being prepared, and each hierarchy's invariants ([`MtHierarchy::from_parts`]:
+//! patches being prepared, and each hierarchy's invariants (`MtHierarchy::from_parts`:
 //! index bounds, node order, monotone errors). A refused file is a [`CacheError`], never a
 //! panic; callers rebuild. Writes go to a temporary name and are renamed into place.
 //! Nothing is ever evicted.

@@ -11,7 +11,7 @@ use super::{CutState, MtHierarchy, NEVER};
 
 impl MtHierarchy {
     /// Whether triangle `t` is in the cut for error `eps`.
-    pub fn in_cut(&self, t: usize, eps: f64) -> bool {
+    pub(crate) fn in_cut(&self, t: usize, eps: f64) -> bool {
         let made = self.node_error[self.created_by[t] as usize];
         // A triangle never removed stays in every cut it is created in, ε = ∞ included.
         let gone = match self.removed_by[t] {
@@ -107,7 +107,7 @@ impl MtHierarchy {
     /// The triangle ranges node `node` removes (`created == false`) or creates (`true`):
     /// applying the node replaces the first by the second (an edge collapse, or several merged
     /// by arc collapse); undoing it is the vertex split.
-    pub fn node_ranges(
+    pub(crate) fn node_ranges(
         &self,
         node: u32,
         created: bool,
@@ -128,7 +128,7 @@ impl MtHierarchy {
 
     /// Where vertex `v` is after the first `applied` nodes of [`MtHierarchy::order`]: the end
     /// of its chain of collapse targets through applied nodes.
-    pub fn vertex_at(&self, v: u32, applied: usize) -> u32 {
+    pub(crate) fn vertex_at(&self, v: u32, applied: usize) -> u32 {
         let mut v = v;
         for _ in 0..self.vertex_target.len() {
             match self.vertex_removed_by.get(v as usize) {
@@ -147,7 +147,7 @@ impl MtHierarchy {
     }
 
     /// Whether vertex `v` is still a vertex of `cut` (not moved away by an applied node).
-    pub fn vertex_alive(&self, cut: &CutState, v: u32) -> bool {
+    pub(crate) fn vertex_alive(&self, cut: &CutState, v: u32) -> bool {
         match self.vertex_removed_by.get(v as usize) {
             Some(&n) if n != NEVER => self.rank[n as usize] as usize >= cut.applied,
             _ => true,
@@ -157,7 +157,12 @@ impl MtHierarchy {
     /// The border loops of `cut` from the patch's original loops: border vertices only ever
     /// collapse along the border onto a border neighbour, and interior vertices never onto
     /// the border, so the cut's loops are the original ones without the vertices moved away.
-    pub fn cut_borders(&self, cut: &CutState, original: &[Vec<u32>], out: &mut Vec<Vec<u32>>) {
+    pub(crate) fn cut_borders(
+        &self,
+        cut: &CutState,
+        original: &[Vec<u32>],
+        out: &mut Vec<Vec<u32>>,
+    ) {
         out.clear();
         for ring in original {
             let kept: Vec<u32> = ring

@@ -161,7 +161,7 @@ impl MtHierarchy {
     /// every invariant the cut algorithms rely on (lengths, index bounds, creators before
     /// removers, finite non-negative errors with node 0 at 0, errors monotone along every
     /// arc); the reason otherwise. Untrusted input (a cache file) cannot make it panic.
-    pub fn from_parts(p: MtParts, vertex_count: usize) -> Result<MtHierarchy, String> {
+    pub(crate) fn from_parts(p: MtParts, vertex_count: usize) -> Result<MtHierarchy, String> {
         let (m, nodes) = (p.triangles.len(), p.node_error.len());
         if p.created_by.len() != m || p.removed_by.len() != m {
             return Err("creator / remover lists do not match the triangles".into());

@@ -4,7 +4,7 @@
 //! The tessellator ([`crate::tessellate::TrimmedTessellator`]) measures its error at 7 points
 //! per triangle against the *untrimmed* surface at the parameters it refined; a triangle over
 //! a wrong trim region, or between those points, goes unseen. Here every triangle is sampled
-//! on a barycentric grid of [`SAMPLES_PER_SIDE`] steps (28 points, 4× the refinement's), and
+//! on a barycentric grid of `SAMPLES_PER_SIDE` steps (28 points, 4× the refinement's), and
 //! each sample `p` is judged against the face itself:
 //!
 //! 1. `p` is projected onto the surface from scratch (no parameter from the tessellator), at
@@ -27,7 +27,7 @@
 //! That is the distance from the mesh to the face; a mesh can be close to its face everywhere
 //! and still leave part of the face out (a sphere cap whose triangles at the pole are slivers
 //! spanning the whole opening angle). So the face is sampled too — a grid over its loops'
-//! parameter box, the samples inside the trim, at most [`MAX_FACE_SAMPLES`] of them and no
+//! parameter box, the samples inside the trim, at most `MAX_FACE_SAMPLES` of them and no
 //! closer than ε/2 — and each face point's distance to the mesh (nearest triangle, through a
 //! grid of cells) is the geometry missing there ([`FaceFidelity::missing`]).
 //!
@@ -52,13 +52,13 @@ use boundary::*;
 use triangle_grid::TriangleGrid;
 
 /// Barycentric steps per triangle side: (n+1)(n+2)/2 samples per triangle.
-pub const SAMPLES_PER_SIDE: usize = 6;
+pub(crate) const SAMPLES_PER_SIDE: usize = 6;
 /// Trim loops are rebuilt to this fraction of ε.
-pub const LOOP_FRACTION: f64 = 1.0 / 16.0;
+pub(crate) const LOOP_FRACTION: f64 = 1.0 / 16.0;
 /// Most samples per face (larger meshes are sampled with fewer steps per side).
 pub const MAX_SAMPLES: usize = 400_000;
 /// Most samples of the face itself (for [`FaceFidelity::missing`]) per face.
-pub const MAX_FACE_SAMPLES: usize = 4096;
+pub(crate) const MAX_FACE_SAMPLES: usize = 4096;
 
 /// The measured distance of one face's tessellation to the trimmed face.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -328,7 +328,7 @@ pub fn measure(
 }
 
 /// As [`measure`], with the boundary `search`.
-pub fn measure_with(
+pub(crate) fn measure_with(
     face: &TrimmedFace,
     positions: &[DVec3],
     triangles: &[[u32; 3]],
