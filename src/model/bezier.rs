@@ -178,7 +178,7 @@ impl BezierPatch {
     }
 
     /// Position only.
-    pub(crate) fn eval(&self, u: f64, v: f64) -> DVec3 {
+    pub fn eval(&self, u: f64, v: f64) -> DVec3 {
         let mut bu = [0.0; MAX_DEGREE + 1];
         let mut bv = [0.0; MAX_DEGREE + 1];
         bernstein(self.du, u, &mut bu);
