@@ -8,9 +8,9 @@ use std::sync::Arc;
 
 use glam::DVec3;
 use patchwork::check::fidelity::{measure, measure_placed, measure_scene};
-use patchwork::model::{PatchSurface, Scene, TrimmedFace};
+use patchwork::model::{PatchSurface, TrimmedFace};
 use patchwork::tessellate::{PatchMesh, Tessellators};
-use patchwork::view::{DEFAULT_FOV_Y_DEG, DEFAULT_PIXEL_ERROR, View};
+use patchwork::view::DEFAULT_PIXEL_ERROR;
 
 const STEP: [&str; 5] = [
     "as1-oc-214.stp",
@@ -20,20 +20,11 @@ const STEP: [&str; 5] = [
     "screw.step",
 ];
 
-fn framing(scene: &Scene) -> View {
-    View::framing(
-        &scene.bounds,
-        scene.up.vector(),
-        DEFAULT_FOV_Y_DEG.to_radians(),
-        (1024, 768),
-    )
-}
-
 #[test]
 fn every_shipped_face_is_within_its_tolerance_of_the_trimmed_face() {
     for file in STEP {
         let scene = common::load(file);
-        let faces = measure_scene(&scene, &framing(&scene), DEFAULT_PIXEL_ERROR);
+        let faces = measure_scene(&scene, &common::framing(&scene), DEFAULT_PIXEL_ERROR);
         assert_eq!(
             faces.len(),
             scene.patches.len(),
@@ -59,7 +50,7 @@ fn every_shipped_face_is_within_its_tolerance_of_the_trimmed_face() {
 #[test]
 fn a_mesh_built_for_four_times_the_tolerance_fails() {
     let scene = common::load("as1-oc-214.stp");
-    let view = framing(&scene);
+    let view = common::framing(&scene);
     let mut t = Tessellators::new();
     let mut worst: f64 = 0.0;
     for p in &scene.patches {
@@ -178,7 +169,7 @@ fn a_hole_a_period_away_is_cut() {
         unreachable!("matched above")
     };
     assert_eq!(face.loops.len(), 2, "outer loop and slot");
-    let view = framing(&scene);
+    let view = common::framing(&scene);
     let eps = view.eps_obj(&p.bounds, DEFAULT_PIXEL_ERROR);
     let mut m = PatchMesh::default();
     Tessellators::new().patch(p, eps, &mut m);

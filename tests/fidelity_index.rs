@@ -7,10 +7,10 @@ mod common;
 use patchwork::check::fidelity::{
     FaceFidelity, Search, measure_meshes_search, measure_placed_with,
 };
-use patchwork::model::{PatchSurface, Scene};
+use patchwork::model::PatchSurface;
 use patchwork::tessellate::{tessellate_scene, tessellate_scene_tolerance};
 use patchwork::util::NoProgress;
-use patchwork::view::{DEFAULT_FOV_Y_DEG, DEFAULT_PIXEL_ERROR, View};
+use patchwork::view::DEFAULT_PIXEL_ERROR;
 
 /// Planes, cylinders, cones, spheres, tori, B-splines; loops around periodic surfaces and
 /// through poles; a thread whose loops run around many periods.
@@ -22,15 +22,6 @@ const MODELS: [&str; 6] = [
     "as1-oc-214.stp",
     "screw.step",
 ];
-
-fn framing(scene: &Scene) -> View {
-    View::framing(
-        &scene.bounds,
-        scene.up.vector(),
-        DEFAULT_FOV_Y_DEG.to_radians(),
-        (1024, 768),
-    )
-}
 
 #[test]
 fn indexed_boundary_queries_give_the_exhaustive_figures_bit_for_bit() {
@@ -98,7 +89,7 @@ fn placements_sharing_a_mesh_are_measured_once_with_their_own_figures() {
         ),
         (
             "the view",
-            tessellate_scene(&scene, &framing(&scene), 4.0 * DEFAULT_PIXEL_ERROR),
+            tessellate_scene(&scene, &common::framing(&scene), 4.0 * DEFAULT_PIXEL_ERROR),
             1e-9,
         ),
     ];

@@ -17,7 +17,7 @@ use patchwork::model::trimmed::Curve3D;
 use patchwork::model::{PatchSurface, Scene, TrimmedFace};
 use patchwork::render::FatBorders;
 use patchwork::tessellate::tessellate_scene_tolerance;
-use patchwork::view::{DEFAULT_FOV_Y_DEG, DEFAULT_PIXEL_ERROR, View};
+use patchwork::view::DEFAULT_PIXEL_ERROR;
 
 /// The shipped IGES files and their trimmed surfaces (144).
 const SHIPPED: [(&str, usize); 2] = [
@@ -267,20 +267,11 @@ fn cut_and_corrupted_files_never_panic() {
     }
 }
 
-fn framing(scene: &Scene) -> View {
-    View::framing(
-        &scene.bounds,
-        scene.up.vector(),
-        DEFAULT_FOV_Y_DEG.to_radians(),
-        (1024, 768),
-    )
-}
-
 #[test]
 fn shipped_files_are_within_their_tolerance_of_the_trimmed_faces() {
     for (file, _) in SHIPPED {
         let scene = common::load(file);
-        let faces = measure_scene(&scene, &framing(&scene), DEFAULT_PIXEL_ERROR);
+        let faces = measure_scene(&scene, &common::framing(&scene), DEFAULT_PIXEL_ERROR);
         assert_eq!(faces.len(), scene.patches.len(), "{file}");
         let (patch, worst) = faces[0];
         assert!(

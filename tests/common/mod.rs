@@ -51,3 +51,14 @@ pub fn golden_view(scene: &Scene, dir: Option<DVec3>) -> View {
         Some(d) => View::framing_from(&scene.bounds, up, d, fov, size),
     }
 }
+
+/// The CLI's default camera for `scene` at 1024×768 (`View::framing`, the default field of
+/// view), as `stats` measures fidelity.
+pub fn framing(scene: &Scene) -> View {
+    View::framing(
+        &scene.bounds,
+        scene.up.vector(),
+        view::DEFAULT_FOV_Y_DEG.to_radians(),
+        (1024, 768),
+    )
+}
