@@ -356,38 +356,37 @@ fn edge_clip(p: vec3<f32>, eps: f32) -> vec4<f32> {
 // Outside the clip volume (right of it): a segment whose two ends are here draws nothing.
 const EDGE_NOWHERE: vec4<f32> = vec4<f32>(2.0, 2.0, 2.0, 1.0);
 
-@vertex
-fn vs_edge(@builtin(vertex_index) i: u32) -> EdgeOut {
-    let s = i / 2u;
+// The end of an edge segment at world point p with outward normal n, of a patch with error
+// eps; `drawn` false moves it outside the clip volume.
+fn edge_end(drawn: bool, p: vec3<f32>, n: vec3<f32>, eps: f32) -> EdgeOut {
     var out: EdgeOut;
     out.clip = EDGE_NOWHERE;
     out.world = vec3<f32>(0.0, 0.0, 0.0);
     out.normal = vec3<f32>(0.0, 0.0, 0.0);
-    if (edge_drawn(s)) {
-        out.world = fb_cur(s + (i & 1u));
-        out.normal = fb_normal(s + (i & 1u));
-        out.clip = edge_clip(out.world, fb_word_f(s, 3u));
+    if (drawn) {
+        out.world = p;
+        out.normal = n;
+        out.clip = edge_clip(p, eps);
     }
     return out;
+}
+
+@vertex
+fn vs_edge(@builtin(vertex_index) i: u32) -> EdgeOut {
+    let s = i / 2u;
+    let k = s + (i & 1u);
+    return edge_end(edge_drawn(s), fb_cur(k), fb_normal(k), fb_word_f(s, 3u));
 }
 
 // As `vs_edge` for the points of a shared mesh drawn with a placement (instanced parts).
 @vertex
 fn vs_edge_placed(@builtin(vertex_index) i: u32, @location(4) record: u32) -> EdgeOut {
     let s = i / 2u;
-    var out: EdgeOut;
-    out.clip = EDGE_NOWHERE;
-    out.world = vec3<f32>(0.0, 0.0, 0.0);
-    out.normal = vec3<f32>(0.0, 0.0, 0.0);
-    if (edge_drawn(s)) {
-        let r = records[record];
-        let m = FbPlacement(r.x, r.y, r.z);
-        let eps = fb_word_f(s, 3u) + bitcast<f32>(r.extra.z);
-        out.world = fb_place(m, fb_cur(s + (i & 1u)));
-        out.normal = fb_turn(m, fb_normal(s + (i & 1u)));
-        out.clip = edge_clip(out.world, eps);
-    }
-    return out;
+    let k = s + (i & 1u);
+    let r = records[record];
+    let m = FbPlacement(r.x, r.y, r.z);
+    let eps = fb_word_f(s, 3u) + bitcast<f32>(r.extra.z);
+    return edge_end(edge_drawn(s), fb_place(m, fb_cur(k)), fb_turn(m, fb_normal(k)), eps);
 }
 
 // Cut (section planes in use), the model shows its inside, and its back faces with it, where
