@@ -52,6 +52,7 @@ pub fn assemble(model: StepModel, progress: &dyn Progress) -> Result<Scene, Load
             let out = r.and_then(|mut face| {
                 let (bounds, bbox) = probe(t, &face)?;
                 face.bounds = bounds;
+                face.loop_starts = t.loop_starts().to_vec();
                 let normals = t.edge_normals(&face);
                 Ok((face, bbox, normals))
             });

@@ -287,6 +287,7 @@ pub fn face(d: &mut Decoder<'_, '_>, e: &Entry) -> Result<TrimmedFace, IgesError
         domain_left: true,
         bounds: Sphere::around(pts.iter().copied()),
         fast,
+        loop_starts: Vec::new(),
     })
 }
 

@@ -638,6 +638,7 @@ fn convert_face(
         domain_left: face.same_sense,
         bounds: Sphere::around(pts.iter().copied()),
         fast,
+        loop_starts: Vec::new(),
     })
 }
 

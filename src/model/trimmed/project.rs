@@ -176,6 +176,7 @@ mod tests {
                 center: DVec3::new(0.0, 0.0, 0.2),
                 radius: 0.45,
             },
+            loop_starts: Vec::new(),
         }
     }
 

@@ -399,3 +399,109 @@ pub(super) fn curve_between(
     };
     (t0 != t1).then_some((le, l, e, 0.5 * (t0 + t1)))
 }
+
+impl TrimmedTessellator {
+    /// The border of one loop: polylines of its edges, projected to parameter space.
+    pub(super) fn loop_points(
+        &mut self,
+        face: &TrimmedFace,
+        li: usize,
+        lp: &[LoopEdge],
+        eps: f64,
+        fine_left: &mut bool,
+        report: &mut TrimReport,
+    ) -> Result<Vec<BPoint>, TrimError> {
+        let s = face;
+        let (pu, pv) = s.periods();
+        let mut pts: Vec<BPoint> = Vec::new();
+        for (k, le) in lp.iter().enumerate() {
+            let e = &le.edge;
+            let (ts, dev) = polyline_params(e, eps * 0.5);
+            report.trim_error = report.trim_error.max(dev);
+            let n = ts.len();
+            let ordered: Vec<f64> = if le.forward {
+                ts
+            } else {
+                ts.into_iter().rev().collect()
+            };
+            let (first, last) = if le.forward {
+                (e.start, e.end)
+            } else {
+                (e.end, e.start)
+            };
+            for (i, &t) in ordered.iter().enumerate() {
+                let p = if i == 0 {
+                    first
+                } else if i == n - 1 {
+                    last
+                } else {
+                    e.point(t)
+                };
+                // Skip a point equal to the previous one (the shared vertex of two edges).
+                if let Some(prev) = pts.last()
+                    && prev.p.distance(p) <= 1e-12 * (1.0 + p.length())
+                {
+                    continue;
+                }
+                let far = 1e-3 * face.bounds.radius;
+                // The loop's first point as an earlier tessellation found it: the same vertex
+                // at every ε (checked, as is that its parameter still lands on it).
+                let known = match (pts.is_empty(), face.loop_starts.get(li)) {
+                    (true, Some(&Some((q, uv)))) if q == p && s.point(uv).distance(p) <= far => {
+                        Some(uv)
+                    }
+                    _ => None,
+                };
+                // The loop's first point is projected from an interior point of its edge: a
+                // vertex on the seam of a closed surface lies on both sides of it, and where
+                // the surface is extended past its seam (a lofted side that a fillet grew, by
+                // 5.4 of 70 in u on generated model gen-7-6) the nearest side was the
+                // extension: the whole loop then followed it, up to 24 off the face.
+                let hint = match pts.last() {
+                    Some(b) => Some(b.uv),
+                    None if known.is_some() => None,
+                    None if ordered.len() >= 2 => {
+                        let q = e.point(0.5 * (ordered[0] + ordered[1]));
+                        s.project_along(q, None, far, fine_left)
+                    }
+                    None => None,
+                };
+                // Loop points lie on the surface (within the model's gaps), whatever ε: a
+                // nearest point farther than this is on another sheet (a thread's next turn,
+                // 1.66 off at ε 1.66 on generated model gen-1-85: the loop then ran over
+                // three turns and half the face was drawn outside its trim).
+                let uv = match known {
+                    Some(uv) => Some(uv),
+                    None => s.project_along(p, hint, far, fine_left),
+                };
+                let Some(mut uv) = uv else {
+                    return Err(TrimError::Projection { edge: e.id });
+                };
+                if let Some(prev) = pts.last() {
+                    uv = unwrap_near(uv, prev.uv, pu, pv);
+                } else if let Some(start) = self.starts.get_mut(li) {
+                    *start = Some((p, uv));
+                }
+                pts.push(BPoint {
+                    p,
+                    uv,
+                    src: Some((li as u32, k as u32, t)),
+                });
+            }
+        }
+        // A loop through a pole runs along the pole line there.
+        expand_poles(face, &mut pts);
+        // The loop closes on its first point: drop a repeated last point.
+        if pts.len() > 1
+            && let (Some(f), Some(l)) = (pts.first(), pts.last())
+            && f.p.distance(l.p) <= 1e-12 * (1.0 + f.p.length())
+        {
+            let l = pts[pts.len() - 1];
+            let unwrapped = unwrap_near(l.uv, f.uv, pu, pv);
+            if unwrapped.distance(f.uv) < 1e-9 * (1.0 + f.uv.length()) {
+                pts.pop();
+            }
+        }
+        Ok(pts)
+    }
+}

@@ -137,6 +137,8 @@ pub struct TrimmedTessellator {
     /// Each vertex's distance from the surface at its parameter: 0 inside, and on the border
     /// how far the face's own edge curve lies off its surface there.
     off: Vec<f64>,
+    /// Per loop of the last face, its first point and parameter ([`TrimmedFace::loop_starts`]).
+    starts: Vec<Option<(DVec3, DVec2)>>,
 }
 
 /// What the tessellator achieved besides the mesh.
@@ -208,6 +210,8 @@ impl TrimmedTessellator {
 
         // 1 + 2: border polylines in 3D and parameter space.
         self.loops.clear();
+        self.starts.clear();
+        self.starts.resize(face.loops.len(), None);
         let mut fine_left = true;
         for (li, lp) in face.loops.iter().enumerate() {
             let pts = self.loop_points(face, li, lp, eps, &mut fine_left, &mut report)?;
@@ -387,6 +391,12 @@ impl TrimmedTessellator {
         Ok(report)
     }
 
+    /// Per loop of the face last tessellated, its first point and that point's parameter
+    /// (`None` where the loop has no point): what [`TrimmedFace::loop_starts`] keeps.
+    pub fn loop_starts(&self) -> &[Option<(DVec3, DVec2)>] {
+        &self.starts
+    }
+
     /// The face's unit normals at the [`SAMPLES`] of each of its edges (per loop, per edge;
     /// `model::edges` compares them across the faces that share an edge), after a successful
     /// [`TrimmedTessellator::tessellate`] of `face`: each sample is found on the surface from
@@ -559,96 +569,6 @@ impl TrimmedTessellator {
                 (s.point(uv).distance(lin) - given).max(0.0)
             })
             .fold(0.0, f64::max)
-    }
-
-    /// The border of one loop: polylines of its edges, projected to parameter space.
-    fn loop_points(
-        &self,
-        face: &TrimmedFace,
-        li: usize,
-        lp: &[LoopEdge],
-        eps: f64,
-        fine_left: &mut bool,
-        report: &mut TrimReport,
-    ) -> Result<Vec<BPoint>, TrimError> {
-        let s = face;
-        let (pu, pv) = s.periods();
-        let mut pts: Vec<BPoint> = Vec::new();
-        for (k, le) in lp.iter().enumerate() {
-            let e = &le.edge;
-            let (ts, dev) = polyline_params(e, eps * 0.5);
-            report.trim_error = report.trim_error.max(dev);
-            let n = ts.len();
-            let ordered: Vec<f64> = if le.forward {
-                ts
-            } else {
-                ts.into_iter().rev().collect()
-            };
-            let (first, last) = if le.forward {
-                (e.start, e.end)
-            } else {
-                (e.end, e.start)
-            };
-            for (i, &t) in ordered.iter().enumerate() {
-                let p = if i == 0 {
-                    first
-                } else if i == n - 1 {
-                    last
-                } else {
-                    e.point(t)
-                };
-                // Skip a point equal to the previous one (the shared vertex of two edges).
-                if let Some(prev) = pts.last()
-                    && prev.p.distance(p) <= 1e-12 * (1.0 + p.length())
-                {
-                    continue;
-                }
-                let far = 1e-3 * face.bounds.radius;
-                // The loop's first point is projected from an interior point of its edge: a
-                // vertex on the seam of a closed surface lies on both sides of it, and where
-                // the surface is extended past its seam (a lofted side that a fillet grew, by
-                // 5.4 of 70 in u on generated model gen-7-6) the nearest side was the
-                // extension: the whole loop then followed it, up to 24 off the face.
-                let hint = match pts.last() {
-                    Some(b) => Some(b.uv),
-                    None if ordered.len() >= 2 => {
-                        let q = e.point(0.5 * (ordered[0] + ordered[1]));
-                        s.project_along(q, None, far, fine_left)
-                    }
-                    None => None,
-                };
-                // Loop points lie on the surface (within the model's gaps), whatever ε: a
-                // nearest point farther than this is on another sheet (a thread's next turn,
-                // 1.66 off at ε 1.66 on generated model gen-1-85: the loop then ran over
-                // three turns and half the face was drawn outside its trim).
-                let uv = s.project_along(p, hint, far, fine_left);
-                let Some(mut uv) = uv else {
-                    return Err(TrimError::Projection { edge: e.id });
-                };
-                if let Some(prev) = pts.last() {
-                    uv = unwrap_near(uv, prev.uv, pu, pv);
-                }
-                pts.push(BPoint {
-                    p,
-                    uv,
-                    src: Some((li as u32, k as u32, t)),
-                });
-            }
-        }
-        // A loop through a pole runs along the pole line there.
-        expand_poles(face, &mut pts);
-        // The loop closes on its first point: drop a repeated last point.
-        if pts.len() > 1
-            && let (Some(f), Some(l)) = (pts.first(), pts.last())
-            && f.p.distance(l.p) <= 1e-12 * (1.0 + f.p.length())
-        {
-            let l = pts[pts.len() - 1];
-            let unwrapped = unwrap_near(l.uv, f.uv, pu, pv);
-            if unwrapped.distance(f.uv) < 1e-9 * (1.0 + f.uv.length()) {
-                pts.pop();
-            }
-        }
-        Ok(pts)
     }
 }
 
