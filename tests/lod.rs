@@ -105,3 +105,46 @@ fn with_a_budget_to_spare_the_jump_converges_at_once() {
         "no crack without fat borders: the check could not fail"
     );
 }
+
+/// On a still camera the budget the visible queue leaves goes to patches the last frame did
+/// not show: with every patch marked hidden, a new view tessellates nothing (the paper's rule:
+/// no work for what was not seen), and the same view again refines all of them.
+#[test]
+fn a_still_camera_refines_what_the_last_frame_did_not_show() {
+    use patchwork::lod::FrameLoop;
+    use patchwork::view::{DEFAULT_FOV_Y_DEG, View};
+    let scene = common::load("teapot.bpt");
+    let (fov, size) = (DEFAULT_FOV_Y_DEG.to_radians(), (512, 384));
+    let up = scene.up.vector();
+    let far = View::framing(&scene.bounds, up, fov, size);
+    let c = scene.bounds.center;
+    let near = View::new(c + (far.eye - c) * 0.3, c, up, fov, size, &scene.bounds);
+    let options = LodOptions {
+        budget: Duration::from_secs(600),
+        ..LodOptions::default()
+    };
+    let mut lod = FrameLoop::new(&scene, &far, options);
+    let n = scene.patches.len();
+    lod.set_visible(&vec![false; n]);
+    let moved = lod.update(&scene, &near);
+    assert_eq!(
+        (moved.retessellated, moved.ahead),
+        (0, 0),
+        "a moving camera tessellated hidden patches: {moved:?}"
+    );
+    let max_px = lod.patch_errors_px().into_iter().fold(0.0f64, f64::max);
+    assert!(
+        max_px > 0.5 * 1.01,
+        "the near view needs nothing finer ({max_px} px): the test proves nothing"
+    );
+    let still = lod.update(&scene, &near);
+    assert!(
+        still.ahead > 0 && still.ahead == still.retessellated && still.queue_left == 0,
+        "{still:?}"
+    );
+    let worst = lod.patch_errors_px().into_iter().fold(0.0f64, f64::max);
+    assert!(
+        worst <= 0.5 * (1.0 + 1e-9),
+        "still {worst} px after the still frame"
+    );
+}

@@ -16,6 +16,13 @@
 //! fixes what is most visible; the patches that are only too fine (no visible error, only
 //! triangles to save) come after all of them, the most wasteful first.
 //!
+//! **Ahead on a still camera.** Hidden patches in the frustum that are too coarse are not
+//! queued (the paper's rule), but when the view is the last frame's they take what the
+//! visible queue leaves of the budget, in the same order: after a jump the first frame
+//! discovers what is visible from the new place and the next one refines it, so whatever the
+//! refined surfaces uncover, or the jump's frame showed for the first time behind them, is
+//! ready without waiting a frame more to be seen (`UpdateStats::ahead`).
+//!
 //! **Reuse within ε.** A trimmed face's tessellation made at level ε_m may hold a finer level
 //! too: a plane bounded by lines is exact at every ε. When its measured errors (surface
 //! samples within `REFINE_TARGET`·ε, trim chords within ε/2: the standard a fresh
@@ -253,6 +260,9 @@ pub struct UpdateStats {
     pub queued: usize,
     /// Patches re-tessellated this frame.
     pub retessellated: usize,
+    /// Of those, patches the last frame did not show, tessellated ahead on a still camera
+    /// with the budget the visible ones left.
+    pub ahead: usize,
     /// Patches switched to a cached level (no tessellation).
     pub from_cache: usize,
     /// Trimmed faces whose current tessellation holds the wanted level by its measured
@@ -320,6 +330,9 @@ pub struct FrameLoop {
     seen_next: Vec<u32>,
     /// Tessellations shared by the placements of one surface (instanced parts).
     shared: shared::SharedTessellations,
+    /// The view of the last update (or of the first tessellation): a frame with the same one
+    /// is a still camera.
+    last_view: View,
 }
 
 /// How much instanced parts saved ([`FrameLoop::instancing`]).
@@ -383,6 +396,7 @@ impl FrameLoop {
             seen,
             seen_next: Vec::new(),
             shared,
+            last_view: *view,
         }
     }
 
@@ -453,7 +467,9 @@ impl FrameLoop {
         let opts = self.options;
         let mut stats = UpdateStats::default();
         let mut queue: Vec<(f64, usize)> = Vec::new();
-        let mut hidden: Vec<usize> = Vec::new();
+        let mut hidden: Vec<(f64, usize)> = Vec::new();
+        let still = *view == self.last_view;
+        self.last_view = *view;
         // Culling through the hierarchy: only the patches inside the frustum are visited.
         if scene_key(scene) != self.bvh_for {
             self.bvh = bvh_of(scene);
@@ -485,7 +501,8 @@ impl FrameLoop {
                     let radius = patch.bounds.radius;
                     queue.push((priority(current, p.wanted, radius, opts.pixel_error), i));
                 } else if current > p.wanted {
-                    hidden.push(i);
+                    let radius = patch.bounds.radius;
+                    hidden.push((priority(current, p.wanted, radius, opts.pixel_error), i));
                 }
             }
         }
@@ -506,13 +523,19 @@ impl FrameLoop {
         }
         // Hidden patches too coarse for the view (not queued: the paper spends no work on
         // what the last frame did not show) still take what costs nothing, so a patch that
-        // shows up after a jump is not drawn coarser than it need be.
-        for &i in &hidden {
+        // shows up after a jump is not drawn coarser than it need be. On a still camera they
+        // also take what the visible queue leaves of the budget, in the same order
+        // (`UpdateStats::ahead`): what the refined surfaces in front will uncover, or what a
+        // jump's first frame showed for the first time, is then ready a frame earlier.
+        let visible_jobs = todo.len();
+        order_queue(&mut hidden);
+        for &(_, i) in &hidden {
             let level = levels.level_for(self.patches[i].wanted);
             let trimmed = matches!(scene.patches[i].surface, PatchSurface::Trimmed(_));
             match self.patches[i].switch_free(level, &levels, trimmed, opts.cache_levels) {
                 Some(Free::Cached) => stats.from_cache += 1,
                 Some(Free::Reused) => stats.reused += 1,
+                None if still => todo.push((i, level)),
                 None => {}
             }
         }
@@ -528,13 +551,16 @@ impl FrameLoop {
             .shared
             .tessellate(scene, &levels, &todo, &mut cuts, Some(deadline));
         stats.copied += (self.shared.saved - saved) as usize;
-        for ((&(i, level), cut), mesh) in todo.iter().zip(cuts).zip(results) {
+        for (k, ((&(i, level), cut), mesh)) in todo.iter().zip(cuts).zip(results).enumerate() {
             self.patches[i].cut = cut;
             match mesh {
                 Some(mesh) => {
                     self.patches[i].install(level, Arc::new(mesh), opts.cache_levels);
                     stats.retessellated += 1;
+                    stats.ahead += usize::from(k >= visible_jobs);
                 }
+                // (A hidden patch left is not behind: nothing asked for it.)
+                None if k >= visible_jobs => {}
                 None => {
                     stats.queue_left += 1;
                     if matches!(
