@@ -8,8 +8,8 @@ mod common;
 use glam::{Vec3, Vec4};
 use patchwork::check::crack::SplitMix64;
 use patchwork::render::fat_border::{
-    INFO_CLOSING, INFO_STRAIGHT, CAP_FLAG, SLOTS_PER_POINT, STRAIGHT_FLAG, WIDTH_MASK,
-    WIDTH_SHIFT, expand, is_straight, position, position_placed,
+    CAP_FLAG, INFO_CLOSING, INFO_STRAIGHT, SLOTS_PER_POINT, STRAIGHT_FLAG, WIDTH_MASK, WIDTH_SHIFT,
+    expand, is_straight, position, position_placed,
 };
 use patchwork::render::shaders::FAT_BORDER_TWIN;
 use patchwork::render::{BorderGeometry, FatBorders};

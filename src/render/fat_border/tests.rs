@@ -351,7 +351,11 @@ fn zigzag_ring(n: usize, zig: f32) -> Vec<Vec3> {
     let mut ring: Vec<Vec3> = (0..n)
         .map(|k| {
             let a = std::f32::consts::TAU * k as f32 / n as f32;
-            let (r, z) = if k % 2 == 0 { (1.0, 0.0) } else { (1.0 - zig, 2.0 * zig) };
+            let (r, z) = if k % 2 == 0 {
+                (1.0, 0.0)
+            } else {
+                (1.0 - zig, 2.0 * zig)
+            };
             Vec3::new(r * a.cos(), r * a.sin(), z)
         })
         .collect();
@@ -385,7 +389,11 @@ fn two_vertex_band_covers_the_eps_neighbourhood_of_a_zigzag_mesh_border() {
     let g = BorderGeometry::of(std::slice::from_ref(&mesh));
     // Orthographic viewers (homogeneous, w = 0): straight on and at 60° to the plane's
     // normal; the image plane's axes a, b.
-    for d in [Vec3::Z, Vec3::new(0.0, 0.866, 0.5), Vec3::new(0.6, -0.3, 0.74)] {
+    for d in [
+        Vec3::Z,
+        Vec3::new(0.0, 0.866, 0.5),
+        Vec3::new(0.6, -0.3, 0.74),
+    ] {
         let d = d.normalize();
         let a = d.any_orthonormal_vector();
         let b = d.cross(a);
