@@ -18,11 +18,14 @@ const FB_TINY: f32 = 1e-12;
 // point ε·normalize(t × d)/cos(θ/2): the band stays at least ε wide and the joint fans have
 // zero area (their triangles are not drawn).
 const FB_STRAIGHT: u32 = 8u;
-// Bit 10 of a slot code: the 2-vertex variant, whose v_i2, v_i5 sit at the mitre points
-// ε·normalize(±t × d)/cos(θ/2), the mitre at most FB_MITRE_LIMIT (`render::fat_border::
-// MITRE_FLAG`, `MITRE_LIMIT`).
-const FB_MITRE: u32 = 1024u;
-const FB_MITRE_LIMIT: f32 = 2.75;
+// Bit 10 of a slot code: the 2-triangle variant (`render::fat_border::CAP_FLAG`), one quad per
+// segment from slots 1, 4 of v_i to slots 6, 3 of v_{i+1}, each quad its segment's own: the
+// displaced vertices of slots 1, 4 (start of s_i) are moved back along s_i by the half-width,
+// those of slots 3, 6 (end of s_{i-1}) on along s_{i-1}, both across the view. The segment
+// extended by the half-width at both ends (the paper's §3.1: "extends the projected line
+// segment by half a pixel in each direction"): every quad holds the whole half-width
+// neighbourhood of its segment's projection, whatever the joint's turn.
+const FB_CAPPED: u32 = 1024u;
 // Bits 4..9 of a slot code (and of a border point's info): the fat border's half-width across
 // the view as q / 63 of ε, q = 0 meaning ε (`render::fat_border::width_bits`).
 const FB_WIDTH_SHIFT: u32 = 4u;
@@ -52,8 +55,8 @@ fn fb_side(dir: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
     return normalize(cross(helper, d));
 }
 
-// World position of the displaced vertex `code` (slot 0..6, plus FB_STRAIGHT) of the fat
-// border of `cur`.
+// World position of the displaced vertex `code` (slot 0..6, plus FB_STRAIGHT or FB_CAPPED, plus
+// the half-width) of the fat border of `cur`.
 fn fat_border_position(
     prev: vec3<f32>,
     cur: vec3<f32>,
@@ -77,19 +80,30 @@ fn fat_border_position(
     let sum = s_prev + s_next;
     let t = fb_normalize_or(sum, s_next);
     var off = vec3<f32>(0.0, 0.0, 0.0);
-    if ((code & FB_STRAIGHT) != 0u) {
+    if ((code & FB_CAPPED) != 0u) {
+        // Slots 1, 4: the start of s_i, moved back along it; 3, 6: the end of s_{i-1},
+        // moved on. cross(d, n) is the segment's direction across the view (its projection,
+        // unit), also where the segment is seen end-on and `fb_side` chose n.
+        var dir = s_next;
+        var along = -1.0;
+        if (slot == 3u || slot == 6u) {
+            dir = s_prev;
+            along = 1.0;
+        }
+        var across = 1.0;
+        if (slot == 4u || slot == 6u) {
+            across = -1.0;
+        }
+        let n = fb_side(dir, d);
+        if (slot == 1u || slot == 3u || slot == 4u || slot == 6u) {
+            off = n * across + cross(d, n) * along;
+        }
+    } else if ((code & FB_STRAIGHT) != 0u) {
         // 1 / cos(θ/2), with cos(θ/2) = |s_{i-1} + s_i| / 2.
         let mitre = 2.0 / max(length(sum), 1.0);
         if (slot >= 1u && slot <= 3u) {
             off = fb_side(t, d) * mitre;
         } else if (slot >= 4u && slot <= 6u) {
-            off = fb_side(-t, d) * mitre;
-        }
-    } else if ((code & FB_MITRE) != 0u) {
-        let mitre = min(2.0 / max(length(sum), FB_TINY), FB_MITRE_LIMIT);
-        if (slot == 2u) {
-            off = fb_side(t, d) * mitre;
-        } else if (slot == 5u) {
             off = fb_side(-t, d) * mitre;
         }
     } else {
@@ -168,19 +182,13 @@ fn fb_neighbour(k: u32, after: bool) -> u32 {
     return k - 1u;
 }
 
-// The point and slot whose displaced vertex vertex i is, for a template of `len` codes
-// (18, 12: slots as the paper's; 6: the 2-vertex variant, whose pattern names the next
-// point's v2, v5 as slots 3, 6).
-fn fb_resolve(i: u32, len: u32) -> vec2<u32> {
+// The point and slot whose displaced vertex vertex i is (every variant's template names the
+// paper's slots; the 2-triangle variant's is the segment quad of the others).
+fn fb_resolve(i: u32) -> vec2<u32> {
     var p = i / 8u;
     var s = i % 8u;
     if ((fb_info(p) & FB_INFO_CLOSING) != 0u) {
-        if (len == 6u) {
-            if (s == 2u || s == 5u) {
-                p = p + 1u;
-                s = 6u;
-            }
-        } else if (s == 1u || s == 4u || s == 5u) {
+        if (s == 1u || s == 4u || s == 5u) {
             p = p + 1u;
             s = 6u;
         } else if (s == 0u || s == 2u) {
@@ -191,20 +199,14 @@ fn fb_resolve(i: u32, len: u32) -> vec2<u32> {
             p = p - (info >> FB_RING_SHIFT) - 1u;
         }
     }
-    if (len == 6u) {
-        if (s == 3u) {
-            s = 2u;
-        } else if (s == 6u) {
-            s = 5u;
-        }
-    }
     return vec2<u32>(p, s);
 }
 
-// Vertex i (of a template with `len` codes) for a viewer at `viewer` (homogeneous, see
-// `fat_border_position`); `w` holds the point it is expanded from (its shading attributes).
+// Vertex i (of a template with `len` codes; 6: the 2-triangle variant, FB_CAPPED) for a
+// viewer at `viewer` (homogeneous, see `fat_border_position`); `w` holds the point it is
+// expanded from (its shading attributes).
 fn fat_border_vertex(i: u32, len: u32, viewer: vec4<f32>) -> vec4<f32> {
-    let r = fb_resolve(i, len);
+    let r = fb_resolve(i);
     let p = r.x;
     var flag = 0u;
     if ((fb_info(p) & FB_INFO_STRAIGHT) != 0u) {
@@ -213,7 +215,7 @@ fn fat_border_vertex(i: u32, len: u32, viewer: vec4<f32>) -> vec4<f32> {
     let prev = fb_cur(fb_neighbour(p, false));
     let next = fb_cur(fb_neighbour(p, true));
     if (len == 6u) {
-        flag = flag | FB_MITRE;
+        flag = flag | FB_CAPPED;
     }
     let code = r.y | flag | (fb_info(p) & FB_WIDTH_MASK);
     let pos = fat_border_position(prev, fb_cur(p), next, viewer, fb_word_f(p, 3u), code);
@@ -257,7 +259,7 @@ fn fat_border_vertex_placed(
     m: FbPlacement,
     eps_added: f32,
 ) -> vec4<f32> {
-    let r = fb_resolve(i, len);
+    let r = fb_resolve(i);
     let p = r.x;
     var flag = 0u;
     if ((fb_info(p) & FB_INFO_STRAIGHT) != 0u) {
@@ -268,7 +270,7 @@ fn fat_border_vertex_placed(
     let cur = fb_place(m, fb_cur(p));
     let eps = fb_word_f(p, 3u) + eps_added;
     if (len == 6u) {
-        flag = flag | FB_MITRE;
+        flag = flag | FB_CAPPED;
     }
     var code = r.y | flag;
     if (eps_added == 0.0) {

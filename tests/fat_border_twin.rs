@@ -8,8 +8,8 @@ mod common;
 use glam::{Vec3, Vec4};
 use patchwork::check::crack::SplitMix64;
 use patchwork::render::fat_border::{
-    INFO_CLOSING, INFO_STRAIGHT, MITRE_FLAG, SLOTS_PER_POINT, STRAIGHT_FLAG, WIDTH_MASK,
-    WIDTH_SHIFT, expand, is_straight, position, position_placed,
+    CAP_FLAG, INFO_CLOSING, INFO_STRAIGHT, SLOTS_PER_POINT, STRAIGHT_FLAG, WIDTH_MASK, WIDTH_SHIFT,
+    expand, is_straight, position, position_placed,
 };
 use patchwork::render::shaders::FAT_BORDER_TWIN;
 use patchwork::render::{BorderGeometry, FatBorders};
@@ -45,8 +45,8 @@ fn inputs() -> Vec<(Vec3, Vec3, Vec3, Vec4, f32, u32)> {
                 // Both branches of the shader, whatever the joint.
                 out.push((prev, cur, next, viewer, eps, slot | width));
                 out.push((prev, cur, next, viewer, eps, slot | STRAIGHT_FLAG | width));
-                // The 2-vertex variant's mitred v_i2, v_i5.
-                out.push((prev, cur, next, viewer, eps, slot | MITRE_FLAG | width));
+                // The 2-triangle variant's capped slots 1, 3, 4, 6.
+                out.push((prev, cur, next, viewer, eps, slot | CAP_FLAG | width));
             }
         }
     }
@@ -84,7 +84,7 @@ fn inputs() -> Vec<(Vec3, Vec3, Vec3, Vec4, f32, u32)> {
         let flagged = |f: u32| (0..=6).map(move |s| s | f);
         for slot in flagged(0)
             .chain(flagged(STRAIGHT_FLAG))
-            .chain(flagged(MITRE_FLAG))
+            .chain(flagged(CAP_FLAG))
         {
             out.push((p, c, n, eye, 0.01, slot));
             // Orthographic, looking along the end-on segment.

@@ -23,10 +23,11 @@
 //! shows hundreds to thousands of crack pixels without fat borders, 82–384 with the 6-vertex
 //! fat borders at half width, and none at full width (there was one a view or so while the
 //! fans had their apex on the T-junction at v_i, see `render::fat_border`). The paper's
-//! 2-vertex variant is ε·cos(θ/2) wide at a joint turning by θ; ours is mitred
-//! (`render::fat_border::MITRE_LIMIT`), and still lets a few pixels through at the sharp
-//! corners of mesh borders (`check --stress`, 20 views: bunny 6, alien 30, cakeBirthday 261
-//! crack pixels, from 71, 126 and 2 017 unmitred).
+//! 2-vertex variant is ε·cos(θ/2) wide at a joint turning by θ; mitred by the segments'
+//! directions in space (at most 2.75 ε) it still let pixels through where mesh borders turn
+//! back on screen (`check --stress`, 20 views: bunny 6, alien 30, cakeBirthday 261 crack
+//! pixels, from 71, 126 and 2 017 unmitred). `FatBorders::Two` now draws capped segment
+//! quads (`render::fat_border`): 0 on all three, on lavapipe and GL.
 //!
 //! Fat borders are drawn [`PatchMesh::border_width`] wide (a Bézier patch's measured border
 //! error, not ε): the retreat adds the distance moved to the border error, so the stress

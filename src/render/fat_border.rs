@@ -9,7 +9,43 @@
 //! * 6 vertices: segment quad (v_i1, v_i4 → v_{i+1,3}, v_{i+1,6}) and fans v_i3–v_i2–v_i1 and
 //!   v_i6–v_i5–v_i4 around v_i (6 triangles per border vertex);
 //! * 4 vertices: the same without v_i2, v_i5 (4 triangles);
-//! * 2 vertices: only v_i2, v_i5, one quad per segment (2 triangles).
+//! * 2 triangles ([`FatBorders::Two`], the paper's "2 vertices" by its cost): the segment quad
+//!   alone, capped — see below.
+//!
+//! **The 2-vertex band cannot close every gap, so `Two` draws capped segment quads.** The
+//! paper's 2-vertex band joins the segments at v_i2, v_i5 on the bisector: at a joint turning
+//! by θ (on screen) it is ε·cos(θ/2) wide. Moving v_i2, v_i5 to the mitre points
+//! (ε / cos(θ/2) from v_i, on both segments' offset lines) is the only way one pair of points
+//! per joint keeps the band ε wide on both segments, and the mitre is unbounded: a border
+//! that turns back on itself on screen (θ → 180°: a spike of a mesh border, or a segment seen
+//! nearly end-on between two others) needs it arbitrarily long, and any limit L leaves the
+//! band L·ε·cos(θ/2) wide at the tip. On screen, with the gap (·) the neighbour's border
+//! leaves outside a spike of the border (—):
+//!
+//! ```text
+//!  a spike: the border runs out to v_i and back (θ near 180°)
+//!
+//!    mitre points (both on the axis)          capped quads
+//!    ┌───────────────────────.__              ┌──────────────────────────┐
+//!    │ v_{i−1} ═══════════════════ v_i  ·     │ v_{i−1} ═════════════ v_i │
+//!    └───────────────────────'‾‾              └──────────────────────────┘
+//!    the band tapers to nothing at the tip:   ε all round: each quad is its
+//!    the gap (·) beyond it stays open         segment ± ε across and along
+//! ```
+//!
+//! A mitre taken from the segments' directions in space is also wrong on screen:
+//! a zigzag mesh border seen at 60° turns sharper in its projection than in space
+//! (`two_vertex_band_covers_the_eps_neighbourhood_of_a_zigzag_mesh_border`: hundreds of
+//! points within 0.95 ε uncovered). So [`FatBorders::Two`] draws one quad per segment, its
+//! own: slots 1, 4 of v_i (start of s_i) moved back along s_i by the half-width, slots 6, 3 of
+//! v_{i+1} (end of s_i) moved on — the paper's §3.1 construction, "extending the line segment
+//! in such a way that the projection … extends the projected line segment by half a pixel
+//! in each direction". Each quad holds its segment's whole half-width neighbourhood on
+//! screen (the stadium lies in the extended rectangle), whatever the turns, so the union
+//! holds the polyline's. It keeps the variant's cost in triangles (2 per border vertex, no
+//! fans) at 4 displaced vertices per point instead of 2. Directions along and across are taken
+//! in the plane across the view (`n = normalize(s × d)`, `d × n` = the segment's projected
+//! direction), so foreshortening does not matter.
 //!
 //! **No T-junctions.** The paper's fans have their apex at v_i, the midpoint of the segment
 //! quad's edge v_i1–v_i4 (and of the previous quad's v_i3–v_i6): a T-junction, where the
@@ -132,7 +168,8 @@ const TEMPLATE_4: [u32; 12] = [
     c(0, 4),
 ];
 
-const TEMPLATE_2: [u32; 6] = [c(0, 2), c(0, 5), c(1, 5), c(0, 2), c(1, 5), c(1, 2)];
+/// The segment quad alone, its corners capped ([`CAP_FLAG`]).
+const TEMPLATE_2: [u32; 6] = [c(0, 1), c(0, 4), c(1, 6), c(0, 1), c(1, 6), c(1, 3)];
 
 /// Triangle-list template drawn once per border vertex v_i, as codes (see `c`).
 pub(crate) fn template(variant: FatBorders) -> &'static [u32] {
@@ -161,12 +198,10 @@ const TINY: f32 = 1e-12;
 pub(crate) const STRAIGHT_COS: f32 = 0.99;
 /// Flag in a slot code (bit 3): the border vertex's joint is straight (`FB_STRAIGHT` in WGSL).
 pub const STRAIGHT_FLAG: u32 = 8;
-/// Flag in a slot code (bit 10): the 2-vertex variant's draw, whose v_i2 and v_i5 sit at the
-/// mitre points at every joint (`FB_MITRE` in WGSL; see [`expand`]).
-pub const MITRE_FLAG: u32 = 1 << 10;
-/// Longest mitre of the 2-vertex variant, in half-widths: joints turning by up to
-/// 2·acos(1 / `MITRE_LIMIT`) ≈ 137° get the whole mitre, sharper ones this much.
-pub(crate) const MITRE_LIMIT: f32 = 2.75;
+/// Flag in a slot code (bit 10): the 2-triangle variant's draw ([`FatBorders::Two`]), whose
+/// segment quads are capped: slots 1, 4 moved back along s_i, slots 3, 6 on along s_{i−1}, by
+/// the half-width (`FB_CAPPED` in WGSL; see [`expand`] and the module doc).
+pub const CAP_FLAG: u32 = 1 << 10;
 
 fn normalize_or(v: Vec3, fallback: Vec3) -> Vec3 {
     let l2 = v.dot(v);
@@ -221,8 +256,8 @@ pub(crate) fn width_bits(width: f64, eps: f64) -> u32 {
 }
 
 /// CPU twin of `fat_border_position` (WGSL). `code` = slot (0 = v_i pushed back, 1..6 = eq.
-/// (1)–(6)) plus [`STRAIGHT_FLAG`] for a straight joint plus [`MITRE_FLAG`] in the 2-vertex
-/// variant's draw plus the half-width across the view
+/// (1)–(6)) plus [`STRAIGHT_FLAG`] for a straight joint or [`CAP_FLAG`] in the 2-triangle
+/// variant's draw (which ignores the straight flag) plus the half-width across the view
 /// as a fraction of ε in [`WIDTH_MASK`] (`width_bits`; 0 = ε; the push-back along the view is
 /// always ε). `viewer` is the viewer in
 /// homogeneous coordinates ([`crate::view::View::viewer`]): `(eye, 1)` under perspective, the
@@ -236,22 +271,26 @@ pub fn expand(prev: Vec3, cur: Vec3, next: Vec3, viewer: Vec4, eps: f32, code: u
     let (s_prev, s_next) = segment_dirs(prev, cur, next);
     let sum = s_prev + s_next;
     let t = normalize_or(sum, s_next);
-    let off = if code & STRAIGHT_FLAG != 0 {
+    let off = if code & CAP_FLAG != 0 {
+        // Slots 1, 4: the start of s_i, moved back along it; 3, 6: the end of s_{i−1}, moved
+        // on. d × n is the segment's direction across the view (its projection, unit), also
+        // where the segment is seen end-on and `side` chose n.
+        let (dir, along) = match slot {
+            3 | 6 => (s_prev, 1.0),
+            _ => (s_next, -1.0),
+        };
+        let across = if slot == 4 || slot == 6 { -1.0 } else { 1.0 };
+        let n = side(dir, d);
+        match slot {
+            1 | 3 | 4 | 6 => n * across + d.cross(n) * along,
+            _ => Vec3::ZERO,
+        }
+    } else if code & STRAIGHT_FLAG != 0 {
         // Mitre point: 1 / cos(θ/2), with cos(θ/2) = |s_{i−1} + s_i| / 2 ≥ 0.997 here.
         let mitre = 2.0 / sum.length().max(1.0);
         match slot {
             1..=3 => side(t, d) * mitre,
             4..=6 => side(-t, d) * mitre,
-            _ => Vec3::ZERO,
-        }
-    } else if code & MITRE_FLAG != 0 {
-        // The 2-vertex variant has no fans: its band is ε·cos(θ/2) wide at a joint turning by
-        // θ at the bisector points, and lets pixels through at the corners of zigzag mesh
-        // borders; at the mitre points it holds the whole ε-neighbourhood of both segments.
-        let mitre = (2.0 / sum.length().max(TINY)).min(MITRE_LIMIT);
-        match slot {
-            2 => side(t, d) * mitre,
-            5 => side(-t, d) * mitre,
             _ => Vec3::ZERO,
         }
     } else {
@@ -321,18 +360,9 @@ pub(crate) fn edge_bits(color: [u8; 4], kind: crate::model::edges::EdgeKind) -> 
 /// Vertex indices per point: slot s of point k is vertex 8k + s.
 pub const SLOTS_PER_POINT: usize = 8;
 
-/// The 2-vertex variant's pattern: the paper's template with the next point's v2, v5 named
-/// slots 3, 6 (which the shader maps to 2, 5), so a closing point can collapse its own v2,
-/// v5 while the ring's last segment still reaches the first point's.
-const PATTERN_2: [u32; 6] = [c(0, 2), c(0, 5), c(1, 6), c(0, 2), c(1, 6), c(1, 3)];
-
-/// The triangle-list codes drawn once per point (see `c`): the templates of 6 and 4
-/// vertices, and `PATTERN_2`.
+/// The triangle-list codes drawn once per point (see `c`): the variant's template.
 pub fn pattern(variant: FatBorders) -> &'static [u32] {
-    match variant {
-        FatBorders::Two => &PATTERN_2,
-        v => template(v),
-    }
+    template(variant)
 }
 
 /// Index `pattern(variant)` for points `0..points`: code (end, slot) of point k is vertex
@@ -367,29 +397,21 @@ pub fn neighbour(points: &[BorderPoint], k: usize, after: bool) -> usize {
 }
 
 /// CPU twin of `fb_resolve` (WGSL): the point and slot whose displaced vertex vertex `i` of
-/// `variant`'s draw is. A closing point's slots 3 and 6 are its ring's first point's; its
-/// other slots coincide with them or with the next point's slot 6, so each of its triangles
-/// has two equal corners.
-pub fn resolve(points: &[BorderPoint], variant: FatBorders, i: usize) -> (usize, u32) {
+/// `variant`'s draw is (the same for every variant: each template names the paper's slots).
+/// A closing point's slots 3 and 6 are its ring's first point's; its other slots coincide
+/// with them or with the next point's slot 6, so each of its triangles has two equal corners.
+pub fn resolve(points: &[BorderPoint], _variant: FatBorders, i: usize) -> (usize, u32) {
     let (mut p, mut s) = (i / SLOTS_PER_POINT, (i % SLOTS_PER_POINT) as u32);
-    let two = variant == FatBorders::Two;
     if point(points, p).info & INFO_CLOSING != 0 {
-        (p, s) = match (two, s) {
-            (true, 2 | 5) | (false, 1 | 4 | 5) => (p.wrapping_add(1), 6),
-            (false, 0 | 2) => (p, 3),
+        (p, s) = match s {
+            1 | 4 | 5 => (p.wrapping_add(1), 6),
+            0 | 2 => (p, 3),
             _ => (p, s),
         };
         let info = point(points, p).info;
         if info & INFO_CLOSING != 0 {
             p = p.wrapping_sub((info >> RING_SHIFT) as usize + 1);
         }
-    }
-    if two {
-        s = match s {
-            3 => 2,
-            6 => 5,
-            s => s,
-        };
     }
     (p, s)
 }
@@ -428,8 +450,8 @@ fn pulled(
     } else {
         0
     };
-    let mitre = if variant == FatBorders::Two {
-        MITRE_FLAG
+    let cap = if variant == FatBorders::Two {
+        CAP_FLAG
     } else {
         0
     };
@@ -443,7 +465,7 @@ fn pulled(
             at(next),
             viewer,
             eps,
-            slot | flag | width | mitre,
+            slot | flag | width | cap,
         ),
         p,
     )

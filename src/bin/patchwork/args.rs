@@ -321,7 +321,8 @@ pub struct DrawArgs {
     /// Background colour R,G,B (0–255).
     #[arg(long, default_value = "255,255,255", value_parser = parse_rgb)]
     pub background: [u8; 3],
-    /// Fat-border variant: off, 6, 4 or 2 displaced vertices per border vertex.
+    /// Fat-border variant: off, 6 or 4 displaced vertices per border vertex (a segment quad
+    /// and fans), or 2 (2 triangles per border vertex: each segment's quad extended by ε).
     #[arg(long, default_value = "6")]
     pub fat_borders: FatBorders,
     /// Samples per pixel: 1 or 4.
