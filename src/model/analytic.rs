@@ -1,6 +1,5 @@
 //! Our own evaluation of truck-stepio's analytic surfaces — plane, sphere, cylinder, cone,
-//! torus, and a curve revolved about an axis (`SURFACE_OF_REVOLUTION`) — point, first and
-//! second derivatives, in closed form.
+//! torus — point, first and second derivatives, in closed form.
 //!
 //! truck evaluates a placed analytic surface as a `Processor`: the entity's point (a revolved
 //! line for a cylinder or a cone, rotated by a 4 × 4 matrix built per point from two matrix
@@ -16,12 +15,16 @@
 //! relative to the surface's size).
 //!
 //! Not taken (stay with truck, `Analytic::of` returns `None`): a placement that is not affine
-//! (a last row other than (0, 0, 0, 1)), and extrusions (truck adds the sweep vector to the
-//! curve's point: nothing to gain).
+//! (a last row other than (0, 0, 0, 1)), and swept surfaces. A surface of revolution of a
+//! curve evaluated this way (the same rotation over truck's curve point) changed figures
+//! beyond rounding — SOT23's revolved face #3521 read 1.819 ε instead of 0.741 ε, R_MELF's
+//! bounding box moved by 1e-3 — and is not profiled hot on the boards (4 such surfaces on
+//! kicad-demo-video), so it stays with truck until that is understood; an extrusion is
+//! cheap in truck already (the sweep vector added to the curve's point).
 
 use glam::{DMat3, DVec2, DVec3};
-use truck_stepio::r#in::alias::re_exports::{Matrix4, ParametricCurve};
-use truck_stepio::r#in::alias::{Curve3D, ElementarySurface, SweptCurve};
+use truck_stepio::r#in::alias::ElementarySurface;
+use truck_stepio::r#in::alias::re_exports::Matrix4;
 
 use super::nurbs::Derivs;
 use super::trimmed::{TruckSurface, to_dvec, vec_to_dvec};
@@ -52,64 +55,21 @@ enum Shape {
         major: f64,
         minor: f64,
     },
-    /// The profile at parameter u turned by the angle v about the line through `origin` along
-    /// the unit `axis` (right-handed).
+    /// The line `p + u d` (truck's `Line::subs`: `p0 + (p1 − p0) u`) turned by the angle v
+    /// about the line through `origin` along the unit `axis` (right-handed): truck-stepio's
+    /// cylinder and cone.
     Revolution {
         origin: DVec3,
         axis: DVec3,
-        profile: Profile,
+        p: DVec3,
+        d: DVec3,
     },
 }
 
-/// A revolved profile: a line (cylinders and cones) or any curve truck evaluates.
-#[derive(Clone, Debug, PartialEq)]
-enum Profile {
-    /// `p + t d`.
-    Line { p: DVec3, d: DVec3 },
-    Curve(Box<Curve3D>),
-}
-
-impl Profile {
-    /// Point, first and second derivatives at `t` (to `order`).
-    #[inline]
-    fn eval(&self, t: f64, order: usize) -> [DVec3; 3] {
-        match self {
-            // truck's `Line::subs`: `p0 + (p1 − p0) t`.
-            Profile::Line { p, d } => [*p + *d * t, *d, DVec3::ZERO],
-            Profile::Curve(c) => {
-                let mut out = [to_dvec(c.subs(t)), DVec3::ZERO, DVec3::ZERO];
-                if order >= 1 {
-                    out[1] = vec_to_dvec(c.der(t));
-                }
-                if order >= 2 {
-                    out[2] = vec_to_dvec(c.der2(t));
-                }
-                out
-            }
-        }
-    }
-}
-
 impl Analytic {
-    /// Our evaluation of `s` when it is an analytic surface or a surface of revolution with an
-    /// affine placement; `None` otherwise.
+    /// Our evaluation of `s` when it is an analytic surface with an affine placement; `None`
+    /// otherwise.
     pub fn of(s: &TruckSurface) -> Option<Analytic> {
-        use truck_stepio::r#in::alias::re_exports::Point3;
-        let revolution = |origin: Point3, axis, profile, m: &Matrix4, orientation| {
-            Analytic::placed(
-                Shape::Revolution {
-                    origin: to_dvec(origin),
-                    axis: vec_to_dvec(axis),
-                    profile,
-                },
-                m,
-                orientation,
-            )
-        };
-        let line = |l: &truck_stepio::r#in::alias::re_exports::Line<Point3>| Profile::Line {
-            p: to_dvec(l.0),
-            d: to_dvec(l.1) - to_dvec(l.0),
-        };
         let out = match s {
             TruckSurface::ElementarySurface(e) => match e.as_ref() {
                 ElementarySurface::Plane(p) => Some(Analytic {
@@ -147,29 +107,22 @@ impl Analytic {
                 }
                 ElementarySurface::CylindricalSurface(p) | ElementarySurface::ConicalSurface(p) => {
                     let r = p.entity();
-                    revolution(
-                        r.origin(),
-                        r.axis(),
-                        line(r.entity_curve()),
+                    let line = r.entity_curve();
+                    Analytic::placed(
+                        Shape::Revolution {
+                            origin: to_dvec(r.origin()),
+                            axis: vec_to_dvec(r.axis()),
+                            p: to_dvec(line.0),
+                            d: to_dvec(line.1) - to_dvec(line.0),
+                        },
                         p.transform(),
                         p.orientation(),
                     )
                 }
             },
-            TruckSurface::SweptCurve(c) => match c.as_ref() {
-                SweptCurve::RevolutedCurve(p) => {
-                    let r = p.entity();
-                    revolution(
-                        r.origin(),
-                        r.axis(),
-                        Profile::Curve(Box::new(r.entity_curve().clone())),
-                        p.transform(),
-                        p.orientation(),
-                    )
-                }
-                SweptCurve::ExtrudedCurve(_) => None,
-            },
-            TruckSurface::BSplineSurface(_) | TruckSurface::NurbsSurface(_) => None,
+            TruckSurface::SweptCurve(_)
+            | TruckSurface::BSplineSurface(_)
+            | TruckSurface::NurbsSurface(_) => None,
         }?;
         let finite = match &out.shape {
             Shape::Plane { o, du, dv } => o.is_finite() && du.is_finite() && dv.is_finite(),
@@ -179,17 +132,8 @@ impl Analytic {
                 major,
                 minor,
             } => center.is_finite() && major.is_finite() && minor.is_finite(),
-            Shape::Revolution {
-                origin,
-                axis,
-                profile,
-            } => {
-                origin.is_finite()
-                    && axis.is_finite()
-                    && match profile {
-                        Profile::Line { p, d } => p.is_finite() && d.is_finite(),
-                        Profile::Curve(_) => true,
-                    }
+            Shape::Revolution { origin, axis, p, d } => {
+                origin.is_finite() && axis.is_finite() && p.is_finite() && d.is_finite()
             }
         };
         (finite && out.linear.is_finite() && out.translation.is_finite()).then_some(out)
@@ -293,11 +237,7 @@ impl Shape {
                     out[5] = DVec3::new(c * cu, c * su, -minor * sv);
                 }
             }
-            Shape::Revolution {
-                origin,
-                axis,
-                profile,
-            } => {
+            Shape::Revolution { origin, axis, p, d } => {
                 let (s, c) = (v.sin(), v.cos());
                 let a = *axis;
                 // Rodrigues: the rotation by v about the unit axis.
@@ -305,16 +245,15 @@ impl Shape {
                     let along = a * a.dot(x);
                     along + (x - along) * c + a.cross(x) * s
                 };
-                let p = profile.eval(u, order);
-                let w = p[0] - *origin;
+                let w = (*p + *d * u) - *origin;
                 out[0] = *origin + rot(w);
                 if order >= 1 {
-                    out[1] = rot(p[1]);
+                    out[1] = rot(*d);
                     out[2] = rot(a.cross(w));
                 }
                 if order >= 2 {
-                    out[3] = rot(p[2]);
-                    out[4] = rot(a.cross(p[1]));
+                    // The line's second derivative is zero.
+                    out[4] = rot(a.cross(*d));
                     out[5] = rot(a.cross(a.cross(w)));
                 }
             }
@@ -328,8 +267,8 @@ mod tests {
     use super::*;
     use crate::model::trimmed::SurfaceEval;
     use truck_stepio::r#in::alias::re_exports::{
-        BSplineCurve, InnerSpace, Invertible, KnotVec, Line, Plane, Point3, Processor,
-        RevolutedCurve, Sphere, Torus, Transformed, Vector3,
+        InnerSpace, Invertible, KnotVec, Line, Plane, Point3, Processor, RevolutedCurve,
+        Sphere, Torus, Transformed, Vector3,
     };
 
     /// A deterministic generator of uniform numbers in [0, 1).
@@ -396,22 +335,6 @@ mod tests {
         cone.transform_by(placement(rng));
         let uninverted = cone.clone();
         cone.invert();
-        // A surface of revolution of a cubic B-spline profile.
-        let profile = Curve3D::BSplineCurve(BSplineCurve::new(
-            KnotVec::bezier_knot(3),
-            (0..4)
-                .map(|k| Point3::new(1.0 + rng.range(0.0, 3.0), 0.0, k as f64))
-                .collect(),
-        ));
-        let swept = Processor::new(RevolutedCurve::by_revolution(
-            profile,
-            Point3::new(0.5, 0.2, 0.0),
-            Vector3::new(0.1, 0.0, 1.0),
-        ))
-        .transformed(placement(rng));
-        let mut swept_inverted = swept.clone();
-        swept_inverted.invert();
-        use truck_stepio::r#in::alias::SweptCurve as S;
         vec![
             ("plane", elementary(ElementarySurface::Plane(plane))),
             ("sphere", elementary(ElementarySurface::Sphere(sphere))),
@@ -424,14 +347,6 @@ mod tests {
             (
                 "cone, not inverted",
                 elementary(ElementarySurface::ConicalSurface(uninverted)),
-            ),
-            (
-                "revolution",
-                TruckSurface::SweptCurve(Box::new(S::RevolutedCurve(swept))),
-            ),
-            (
-                "revolution, inverted",
-                TruckSurface::SweptCurve(Box::new(S::RevolutedCurve(swept_inverted))),
             ),
         ]
     }
@@ -470,12 +385,14 @@ mod tests {
                 }
             }
         }
-        assert_eq!(compared, 20 * 8 * 50 * 6);
+        assert_eq!(compared, 20 * 6 * 50 * 6);
     }
 
-    /// B-splines (our `nurbs` module's) and extrusions are not taken here.
+    /// B-splines (our `nurbs` module's), extrusions and surfaces of revolution are not taken
+    /// here.
     #[test]
-    fn bsplines_and_extrusions_are_not_taken() {
+    fn bsplines_and_swept_surfaces_are_not_taken() {
+        use truck_stepio::r#in::alias::SweptCurve;
         use truck_stepio::r#in::alias::re_exports::{BSplineSurface, ExtrudedCurve};
         let b = BSplineSurface::new(
             (KnotVec::bezier_knot(1), KnotVec::bezier_knot(1)),
@@ -485,9 +402,19 @@ mod tests {
             ],
         );
         assert!(Analytic::of(&TruckSurface::BSplineSurface(Box::new(b))).is_none());
-        let line = Curve3D::Line(Line(Point3::new(0.0, 0.0, 0.0), Point3::new(1.0, 0.0, 0.0)));
-        let e = ExtrudedCurve::by_extrusion(line, Vector3::unit_z());
+        let line = truck_stepio::r#in::alias::Curve3D::Line(Line(
+            Point3::new(0.0, 0.0, 0.0),
+            Point3::new(1.0, 0.0, 0.0),
+        ));
+        let e = ExtrudedCurve::by_extrusion(line.clone(), Vector3::unit_z());
         let s = TruckSurface::SweptCurve(Box::new(SweptCurve::ExtrudedCurve(e)));
+        assert!(Analytic::of(&s).is_none());
+        let r = Processor::new(RevolutedCurve::by_revolution(
+            line,
+            Point3::new(0.0, 1.0, 0.0),
+            Vector3::unit_x(),
+        ));
+        let s = TruckSurface::SweptCurve(Box::new(SweptCurve::RevolutedCurve(r)));
         assert!(Analytic::of(&s).is_none());
     }
 }

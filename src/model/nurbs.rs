@@ -47,7 +47,7 @@ pub enum FastSurface {
         base: TruckSurface,
         distance: f64,
     },
-    /// A plane, sphere, cylinder, cone, torus or surface of revolution in closed form
+    /// A plane, sphere, cylinder, cone or torus in closed form
     /// (`model::analytic`): truck's own surface, so truck's projection search still applies.
     Analytic(super::analytic::Analytic),
 }
