@@ -267,8 +267,8 @@ mod tests {
     use super::*;
     use crate::model::trimmed::SurfaceEval;
     use truck_stepio::r#in::alias::re_exports::{
-        InnerSpace, Invertible, KnotVec, Line, Plane, Point3, Processor, RevolutedCurve,
-        Sphere, Torus, Transformed, Vector3,
+        InnerSpace, Invertible, KnotVec, Line, Plane, Point3, Processor, RevolutedCurve, Sphere,
+        Torus, Transformed, Vector3,
     };
 
     /// A deterministic generator of uniform numbers in [0, 1).
@@ -303,7 +303,11 @@ mod tests {
     fn surfaces(rng: &mut Rng) -> Vec<(&'static str, TruckSurface)> {
         let elementary = |e| TruckSurface::ElementarySurface(Box::new(e));
         let m = placement(rng);
-        let o = Point3::new(rng.range(-5.0, 5.0), rng.range(-5.0, 5.0), rng.range(-5.0, 5.0));
+        let o = Point3::new(
+            rng.range(-5.0, 5.0),
+            rng.range(-5.0, 5.0),
+            rng.range(-5.0, 5.0),
+        );
         let plane = Plane::new(o, o + rng.vector(3.0), o + rng.vector(3.0));
         let sphere = Processor::new(truck_stepio::r#in::alias::Sphere(Sphere::new(
             Point3::new(0.0, 0.0, 0.0),
@@ -321,8 +325,7 @@ mod tests {
         let centre = Point3::new(1.0, -2.0, 3.0);
         let z = rng.vector(1.0);
         let p = centre + rng.vector(1.0).cross(z).normalize_to(r);
-        let mut cylinder =
-            Processor::new(RevolutedCurve::by_revolution(Line(p, p + z), centre, z));
+        let mut cylinder = Processor::new(RevolutedCurve::by_revolution(Line(p, p + z), centre, z));
         cylinder.invert();
         // Its cone: the line (r, 0, 0) + t (tan α, 0, 1) about z, placed, inverted.
         let q = Point3::new(rng.range(0.0, 5.0), 0.0, 0.0);
@@ -338,7 +341,10 @@ mod tests {
         vec![
             ("plane", elementary(ElementarySurface::Plane(plane))),
             ("sphere", elementary(ElementarySurface::Sphere(sphere))),
-            ("torus", elementary(ElementarySurface::ToroidalSurface(torus))),
+            (
+                "torus",
+                elementary(ElementarySurface::ToroidalSurface(torus)),
+            ),
             (
                 "cylinder",
                 elementary(ElementarySurface::CylindricalSurface(cylinder)),

@@ -153,7 +153,8 @@ impl Boundary {
             // The first point (a vertex) is projected near the second (inside its edge): on a
             // closed surface extended past its seam, a vertex at the seam is nearest to the
             // extension as well (generated model gen-7-6).
-            let mut prev: Option<DVec2> = face.project_along_in(pts[1].0, None, far, &mut fine_left, grid);
+            let mut prev: Option<DVec2> =
+                face.project_along_in(pts[1].0, None, far, &mut fine_left, grid);
             let mut last: Option<(usize, f64)> = None;
             for &(p, seam, at) in &pts {
                 let Some(mut uv) = face.project_along_in(p, prev, far, &mut fine_left, grid) else {

@@ -30,11 +30,7 @@ fn grid_parameters(
 
 /// The `keep` parameters of `points` (parameter, surface point) nearest to `p`, nearest first
 /// (of equally near ones the first).
-fn nearest_of(
-    p: DVec3,
-    keep: usize,
-    points: impl Iterator<Item = (DVec2, DVec3)>,
-) -> Vec<DVec2> {
+fn nearest_of(p: DVec3, keep: usize, points: impl Iterator<Item = (DVec2, DVec3)>) -> Vec<DVec2> {
     let mut best: Vec<(f64, DVec2)> = Vec::with_capacity(keep + 1);
     for (uv, q) in points {
         let d = q.distance_squared(p);
@@ -57,7 +53,11 @@ pub(super) fn nearest_of_grid(
     steps: (usize, usize),
     at: impl Fn(DVec2) -> DVec3,
 ) -> Vec<DVec2> {
-    nearest_of(p, keep, grid_parameters(range, steps).map(|uv| (uv, at(uv))))
+    nearest_of(
+        p,
+        keep,
+        grid_parameters(range, steps).map(|uv| (uv, at(uv))),
+    )
 }
 
 /// The grid of a face's coarse search ([`SurfaceEval::project`] without a hint), its surface
