@@ -336,7 +336,7 @@ mod tests {
             Vector3::unit_z(),
         ));
         cone.transform_by(placement(rng));
-        let uninverted = cone.clone();
+        let uninverted = cone;
         cone.invert();
         vec![
             ("plane", elementary(ElementarySurface::Plane(plane))),
