@@ -3,6 +3,7 @@
 //! Data flows one way: `io` builds a [`Scene`], `tessellate` turns each [`Patch`] into a
 //! [`crate::tessellate::PatchMesh`] for a view, `render` draws those.
 
+pub mod analytic;
 pub mod bezier;
 pub mod creases;
 pub mod edges;

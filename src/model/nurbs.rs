@@ -47,6 +47,9 @@ pub enum FastSurface {
         base: TruckSurface,
         distance: f64,
     },
+    /// A plane, sphere, cylinder, cone or torus in closed form
+    /// (`model::analytic`): truck's own surface, so truck's projection search still applies.
+    Analytic(super::analytic::Analytic),
 }
 
 impl FastSurface {
@@ -58,8 +61,34 @@ impl FastSurface {
                 (n.knots.0.capacity() + n.knots.1.capacity()) * size_of::<f64>()
                     + n.points.capacity() * size_of::<DVec4>()
             }
-            FastSurface::OffsetOfTruck { .. } => 0,
+            FastSurface::OffsetOfTruck { .. } | FastSurface::Analytic(_) => 0,
         }
+    }
+
+    /// Whether this is the face's truck surface evaluated our way (so truck's own searches on
+    /// it find this surface's points): an analytic surface. A B-spline's search stays ours, as
+    /// it was before analytic surfaces were taken here; an offset is not truck's surface.
+    pub(crate) fn is_truck_surface(&self) -> bool {
+        matches!(self, FastSurface::Analytic(_))
+    }
+
+    /// The point at `uv` (as `eval(uv, 0)[0]`, without returning the derivatives' array).
+    #[inline]
+    pub(crate) fn point(&self, uv: DVec2) -> DVec3 {
+        match self {
+            FastSurface::Analytic(a) => a.eval(uv, 0)[0],
+            _ => self.eval(uv, 0)[0],
+        }
+    }
+
+    /// The first derivatives at `uv` (as `eval(uv, 1)[1..3]`).
+    #[inline]
+    pub(crate) fn derivs(&self, uv: DVec2) -> (DVec3, DVec3) {
+        let d = match self {
+            FastSurface::Analytic(a) => a.eval(uv, 1),
+            _ => self.eval(uv, 1),
+        };
+        (d[1], d[2])
     }
 
     /// Point, first and (for `order` 2) second derivatives.
@@ -72,6 +101,7 @@ impl FastSurface {
             FastSurface::OffsetOfTruck { base, distance } => {
                 offset_eval(&|uv, o| truck_eval(base, uv, o), *distance, uv, order)
             }
+            FastSurface::Analytic(a) => a.eval(uv, order),
         }
     }
 }

@@ -1,5 +1,6 @@
 //! Trimmed surfaces: a parametric surface (B-spline, NURBS, plane, cylinder, cone, sphere,
-//! torus, swept curve — evaluated by truck) cut out by closed loops of 3D edge curves, as a
+//! torus, swept curve — read by truck, evaluated by `model::nurbs` and `model::analytic` where
+//! they take it) cut out by closed loops of 3D edge curves, as a
 //! STEP `ADVANCED_FACE` defines it. The loops are kept as 3D curves; their parameter-space image
 //! is computed by the tessellator for each tolerance (`tessellate::trimmed`).
 
@@ -15,6 +16,7 @@ use super::Sphere;
 use super::nurbs::{FastSurface, NurbsSurface};
 
 mod project;
+pub(crate) use project::CoarseGrid;
 use project::{KEEP_GUESSES, nearest_of_grid};
 
 pub(crate) fn to_dvec(p: Point3) -> DVec3 {
@@ -308,25 +310,26 @@ pub struct TrimmedFace {
 }
 
 impl TrimmedFace {
-    /// Our evaluation of `surface` when it is a B-spline we take (see [`TrimmedFace::fast`]).
+    /// Our evaluation of `surface` when it is a B-spline or an analytic surface we take (see
+    /// [`TrimmedFace::fast`]).
     pub(crate) fn fast_surface(surface: &TruckSurface) -> Option<Arc<FastSurface>> {
-        NurbsSurface::of(surface).map(|n| Arc::new(FastSurface::Nurbs(n)))
+        NurbsSurface::of(surface)
+            .map(FastSurface::Nurbs)
+            .or_else(|| super::analytic::Analytic::of(surface).map(FastSurface::Analytic))
+            .map(Arc::new)
     }
 
     /// The surface's point at `uv` (no seam wrapping).
     fn at(&self, uv: DVec2) -> DVec3 {
         match &self.fast {
-            Some(f) => f.eval(uv, 0)[0],
+            Some(f) => f.point(uv),
             None => self.surface.point(uv),
         }
     }
 
     fn at_derivs(&self, uv: DVec2) -> (DVec3, DVec3) {
         match &self.fast {
-            Some(f) => {
-                let d = f.eval(uv, 1);
-                (d[1], d[2])
-            }
+            Some(f) => f.derivs(uv),
             None => self.surface.derivs(uv),
         }
     }
@@ -361,16 +364,22 @@ impl TrimmedFace {
     /// (truck's searches need a start on some surfaces; a self-intersecting spindle torus has
     /// two sheets close together, so one guess is not enough).
     fn coarse_guesses(&self, p: DVec3) -> Vec<DVec2> {
-        let Some((range, widened)) = self.search_range() else {
+        let Some((range, steps)) = self.coarse_steps() else {
             return Vec::new();
         };
+        nearest_of_grid(p, KEEP_GUESSES, range, steps, |uv| self.at(uv))
+    }
+
+    /// The range and steps of [`TrimmedFace::coarse_guesses`]' grid.
+    #[allow(clippy::type_complexity)]
+    fn coarse_steps(&self) -> Option<(((f64, f64), (f64, f64)), (usize, usize))> {
+        let (range, widened) = self.search_range()?;
         const N: usize = 24;
         // A widened direction across a periodic one (a cone's or cylinder's axis) gets 4× the
         // steps: on a wide cone near its apex the near nappe's grid points can all be nearer
         // than the far nappe's (trj4 #4134 at 24 steps). A plane (nothing periodic, convex
         // distance) keeps 24 × 24: this search runs at each loop's start in every tessellation.
-        let (nu, nv) = (N * widened.0, N * widened.1);
-        nearest_of_grid(p, KEEP_GUESSES, range, (nu, nv), |uv| self.at(uv))
+        Some((range, (N * widened.0, N * widened.1)))
     }
 
     /// The range grid searches cover ([`TrimmedFace::guess_range`] of the finite range or
@@ -547,63 +556,7 @@ impl SurfaceEval for TrimmedFace {
     /// Gauss–Newton on the wrapped surface, and Gauss–Newton from the hint itself (which runs
     /// across a closed seam where truck's search stops at the end of the knot range).
     fn project(&self, p: DVec3, hint: Option<DVec2>) -> Option<DVec2> {
-        let guesses = match hint {
-            Some(h) => vec![h],
-            None => self.coarse_guesses(p),
-        };
-        let start = guesses.first().map(|h| self.wrap(*h));
-        // Truck's own search evaluates truck's surface, which is not this face's where we
-        // evaluate it ourselves (an offset): Gauss–Newton from the guesses alone then.
-        let truck = match self.fast {
-            Some(_) => None,
-            None => self
-                .surface
-                .project(p, start)
-                .map(|uv| self.wrap(uv))
-                .and_then(|uv| self.newton(p, uv)),
-        };
-        let off = |uv: &DVec2| self.point(*uv).distance(p);
-        let mut found: Vec<DVec2> = truck
-            .into_iter()
-            .chain(guesses.iter().filter_map(|g| self.newton(p, *g)))
-            .map(|uv| self.canonical(uv))
-            .collect();
-        let mut best = found
-            .iter()
-            .copied()
-            .min_by(|a, b| off(a).total_cmp(&off(b)))?;
-        if let Some(pole) = self.stalled_at_pole(best, p) {
-            let starts: Vec<DVec2> = self.around_pole(best, pole).collect();
-            found.extend(
-                starts
-                    .into_iter()
-                    .filter_map(|g| self.newton(p, g))
-                    .map(|uv| self.canonical(uv)),
-            );
-            best = found
-                .iter()
-                .copied()
-                .min_by(|a, b| off(a).total_cmp(&off(b)))?;
-        }
-        let Some(h) = hint else {
-            return Some(best);
-        };
-        // Where the surface covers itself twice (past a sphere's pole), several parameters
-        // are equally near: the one nearest the hint keeps a polyline on one sheet.
-        let tie = off(&best) + 1e-9 * self.bounds.radius.max(1e-300);
-        let (pu, pv) = self.periods();
-        let from_hint = |uv: &DVec2| {
-            let d = *uv - h;
-            let w = |x: f64, p: Option<f64>| match p {
-                Some(p) if p > 0.0 => x - (x / p).round() * p,
-                _ => x,
-            };
-            DVec2::new(w(d.x, pu), w(d.y, pv)).length_squared()
-        };
-        found
-            .into_iter()
-            .filter(|uv| off(uv) <= tie)
-            .min_by(|a, b| from_hint(a).total_cmp(&from_hint(b)))
+        self.project_in(p, hint, None)
     }
 
     fn periods(&self) -> (Option<f64>, Option<f64>) {

@@ -91,7 +91,9 @@ pub(super) fn sheet_sides(face: &TrimmedFace, lp: &[(DVec3, DVec2, bool)]) -> Ve
 }
 
 impl Boundary {
-    pub(super) fn build(face: &TrimmedFace, tol: f64) -> Boundary {
+    /// The face's loops sampled to `tol` and projected into its parameter space (searches
+    /// from scratch through `grid`, the face's own coarse grid, when given).
+    pub(super) fn build(face: &TrimmedFace, tol: f64, grid: Option<&CoarseGrid>) -> Boundary {
         let periods = face.periods();
         let mut loops = Vec::new();
         let mut sheets = Vec::new();
@@ -151,10 +153,11 @@ impl Boundary {
             // The first point (a vertex) is projected near the second (inside its edge): on a
             // closed surface extended past its seam, a vertex at the seam is nearest to the
             // extension as well (generated model gen-7-6).
-            let mut prev: Option<DVec2> = face.project_along(pts[1].0, None, far, &mut fine_left);
+            let mut prev: Option<DVec2> =
+                face.project_along_in(pts[1].0, None, far, &mut fine_left, grid);
             let mut last: Option<(usize, f64)> = None;
             for &(p, seam, at) in &pts {
-                let Some(mut uv) = face.project_along(p, prev, far, &mut fine_left) else {
+                let Some(mut uv) = face.project_along_in(p, prev, far, &mut fine_left, grid) else {
                     continue;
                 };
                 if let Some(q) = prev {

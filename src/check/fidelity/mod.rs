@@ -41,7 +41,7 @@
 use glam::{DMat4, DVec2, DVec3};
 
 use crate::model::poles::{self, Pole};
-use crate::model::trimmed::{SurfaceEval, TrimmedFace};
+use crate::model::trimmed::{CoarseGrid, SurfaceEval, TrimmedFace};
 use crate::tessellate::PatchMesh;
 
 mod boundary;
@@ -338,9 +338,13 @@ pub(crate) fn measure_with(
     if triangles.is_empty() || !(eps.is_finite() && eps > 0.0) {
         return None;
     }
+    // The face's coarse search grid, evaluated once for every projection from scratch below
+    // (trim loop points, border vertices, samples whose nearer starts fail): the same guesses.
+    let grid = face.coarse_grid();
+    let grid = Some(&grid);
     let boundary = match search {
-        Search::Indexed => Boundary::build(face, eps * LOOP_FRACTION),
-        Search::Exhaustive => Boundary::build(face, eps * LOOP_FRACTION).exhaustive(),
+        Search::Indexed => Boundary::build(face, eps * LOOP_FRACTION, grid),
+        Search::Exhaustive => Boundary::build(face, eps * LOOP_FRACTION, grid).exhaustive(),
     };
     let mut n = SAMPLES_PER_SIDE;
     while n > 1 && triangles.len() * (n + 1) * (n + 2) / 2 > MAX_SAMPLES {
@@ -384,7 +388,7 @@ pub(crate) fn measure_with(
                     .and_then(|h| face.project(corners[0], Some(h)))
                     .filter(|uv| face.point(*uv).distance(corners[0]) <= on);
                 let uv = from_neighbour
-                    .or_else(|| face.project_on(corners[0], None, on).0)
+                    .or_else(|| face.project_on(corners[0], None, on, grid).0)
                     .unwrap_or_default();
                 if let Some(c) = vertex_uv.get_mut(t[0] as usize) {
                     *c = Some(uv);
@@ -401,7 +405,7 @@ pub(crate) fn measure_with(
                 |(&i, &c)| match vertex_off.get(i as usize).copied().flatten() {
                     Some(o) => o,
                     None => {
-                        let o = edge_offset(face, &boundary, c, eps);
+                        let o = edge_offset(face, &boundary, c, eps, grid);
                         if let Some(slot) = vertex_off.get_mut(i as usize) {
                             *slot = Some(o);
                         }
@@ -435,7 +439,7 @@ pub(crate) fn measure_with(
                     };
                     let scratch = match good(&corner) || agree {
                         true => None,
-                        false => face.project(p, None),
+                        false => face.project_in(p, None, grid),
                     };
                     [near, corner, scratch]
                         .into_iter()
@@ -491,7 +495,13 @@ pub(crate) fn measure_with(
 
 /// How far `p`, a mesh vertex, lies off the face's surface if it lies on the face's edge
 /// curves (within ε/4 of their polylines: a border vertex), else 0.
-fn edge_offset(face: &TrimmedFace, boundary: &Boundary, p: DVec3, eps: f64) -> f64 {
+fn edge_offset(
+    face: &TrimmedFace,
+    boundary: &Boundary,
+    p: DVec3,
+    eps: f64,
+    grid: Option<&CoarseGrid>,
+) -> f64 {
     let Some((d, hint)) = boundary.nearest(p) else {
         return 0.0;
     };
@@ -499,7 +509,7 @@ fn edge_offset(face: &TrimmedFace, boundary: &Boundary, p: DVec3, eps: f64) -> f
         return 0.0;
     }
     // No foot point: no allowance (never an infinite one).
-    [face.project(p, Some(hint)), face.project(p, None)]
+    [face.project(p, Some(hint)), face.project_in(p, None, grid)]
         .into_iter()
         .flatten()
         .map(|uv| face.point(uv).distance(p))

@@ -1,6 +1,8 @@
 //! Searches for the parameter of a point known to lie on a face (a point of a trim curve, a
 //! vertex of a tessellation) beyond the coarse grid of [`SurfaceEval::project`]: a grid fine
-//! enough to step on every sheet nearer than what the coarse search found.
+//! enough to step on every sheet nearer than what the coarse search found. And that coarse
+//! grid kept ([`CoarseGrid`]): its points depend on the face alone, so a caller projecting
+//! many points from scratch (`check::fidelity`) evaluates them once, not per point.
 
 use glam::{DVec2, DVec3};
 
@@ -11,35 +13,152 @@ pub(super) const KEEP_GUESSES: usize = 8;
 /// Most points of [`TrimmedFace::fine_guesses`]' grid.
 const FINE_GRID: usize = 4096;
 
+/// The parameters of the `(nu + 1) × (nv + 1)` grid over `((u0, u1), (v0, v1))`, u outer.
+fn grid_parameters(
+    ((u0, u1), (v0, v1)): ((f64, f64), (f64, f64)),
+    (nu, nv): (usize, usize),
+) -> impl Iterator<Item = DVec2> {
+    (0..=nu).flat_map(move |i| {
+        (0..=nv).map(move |j| {
+            DVec2::new(
+                u0 + (u1 - u0) * i as f64 / nu as f64,
+                v0 + (v1 - v0) * j as f64 / nv as f64,
+            )
+        })
+    })
+}
+
+/// The `keep` parameters of `points` (parameter, surface point) nearest to `p`, nearest first
+/// (of equally near ones the first).
+fn nearest_of(p: DVec3, keep: usize, points: impl Iterator<Item = (DVec2, DVec3)>) -> Vec<DVec2> {
+    let mut best: Vec<(f64, DVec2)> = Vec::with_capacity(keep + 1);
+    for (uv, q) in points {
+        let d = q.distance_squared(p);
+        if !d.is_finite() || best.len() == keep && d >= best[keep - 1].0 {
+            continue;
+        }
+        let k = best.partition_point(|b| b.0 <= d);
+        best.insert(k, (d, uv));
+        best.truncate(keep);
+    }
+    best.into_iter().map(|b| b.1).collect()
+}
+
 /// The `keep` parameters of the `(nu + 1) × (nv + 1)` grid over `((u0, u1), (v0, v1))`
 /// nearest to `p` (`at`: the surface's point), nearest first.
 pub(super) fn nearest_of_grid(
     p: DVec3,
     keep: usize,
-    ((u0, u1), (v0, v1)): ((f64, f64), (f64, f64)),
-    (nu, nv): (usize, usize),
+    range: ((f64, f64), (f64, f64)),
+    steps: (usize, usize),
     at: impl Fn(DVec2) -> DVec3,
 ) -> Vec<DVec2> {
-    let mut best: Vec<(f64, DVec2)> = Vec::with_capacity(keep + 1);
-    for i in 0..=nu {
-        for j in 0..=nv {
-            let uv = DVec2::new(
-                u0 + (u1 - u0) * i as f64 / nu as f64,
-                v0 + (v1 - v0) * j as f64 / nv as f64,
-            );
-            let d = at(uv).distance_squared(p);
-            if !d.is_finite() || best.len() == keep && d >= best[keep - 1].0 {
-                continue;
-            }
-            let k = best.partition_point(|b| b.0 <= d);
-            best.insert(k, (d, uv));
-            best.truncate(keep);
-        }
+    nearest_of(
+        p,
+        keep,
+        grid_parameters(range, steps).map(|uv| (uv, at(uv))),
+    )
+}
+
+/// The grid of a face's coarse search ([`SurfaceEval::project`] without a hint), its surface
+/// points evaluated once ([`TrimmedFace::coarse_grid`]). A search through it
+/// ([`TrimmedFace::project_in`]) finds the very guesses the face's own search finds: the same
+/// points in the same order.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct CoarseGrid {
+    points: Vec<(DVec2, DVec3)>,
+}
+
+impl CoarseGrid {
+    /// The guesses for `p`, nearest first.
+    pub(super) fn nearest(&self, p: DVec3) -> Vec<DVec2> {
+        nearest_of(p, KEEP_GUESSES, self.points.iter().copied())
     }
-    best.into_iter().map(|b| b.1).collect()
 }
 
 impl TrimmedFace {
+    /// As [`SurfaceEval::project`], the coarse search (without a hint) through `grid` when
+    /// given: the face's own [`TrimmedFace::coarse_grid`], whose points are this search's
+    /// (the same result, without evaluating them again).
+    pub(crate) fn project_in(
+        &self,
+        p: DVec3,
+        hint: Option<DVec2>,
+        grid: Option<&CoarseGrid>,
+    ) -> Option<DVec2> {
+        let guesses = match (hint, grid) {
+            (Some(h), _) => vec![h],
+            (None, Some(g)) => g.nearest(p),
+            (None, None) => self.coarse_guesses(p),
+        };
+        let start = guesses.first().map(|h| self.wrap(*h));
+        // Truck's own search evaluates truck's surface, which is not this face's where we
+        // evaluate it ourselves (an offset; B-splines as before): Gauss–Newton from the
+        // guesses alone then. An analytic surface is truck's, evaluated in closed form.
+        let truck = match self.fast.as_deref() {
+            Some(f) if !f.is_truck_surface() => None,
+            _ => self
+                .surface
+                .project(p, start)
+                .map(|uv| self.wrap(uv))
+                .and_then(|uv| self.newton(p, uv)),
+        };
+        let off = |uv: &DVec2| self.point(*uv).distance(p);
+        let mut found: Vec<DVec2> = truck
+            .into_iter()
+            .chain(guesses.iter().filter_map(|g| self.newton(p, *g)))
+            .map(|uv| self.canonical(uv))
+            .collect();
+        let mut best = found
+            .iter()
+            .copied()
+            .min_by(|a, b| off(a).total_cmp(&off(b)))?;
+        if let Some(pole) = self.stalled_at_pole(best, p) {
+            let starts: Vec<DVec2> = self.around_pole(best, pole).collect();
+            found.extend(
+                starts
+                    .into_iter()
+                    .filter_map(|g| self.newton(p, g))
+                    .map(|uv| self.canonical(uv)),
+            );
+            best = found
+                .iter()
+                .copied()
+                .min_by(|a, b| off(a).total_cmp(&off(b)))?;
+        }
+        let Some(h) = hint else {
+            return Some(best);
+        };
+        // Where the surface covers itself twice (past a sphere's pole), several parameters
+        // are equally near: the one nearest the hint keeps a polyline on one sheet.
+        let tie = off(&best) + 1e-9 * self.bounds.radius.max(1e-300);
+        let (pu, pv) = self.periods();
+        let from_hint = |uv: &DVec2| {
+            let d = *uv - h;
+            let w = |x: f64, p: Option<f64>| match p {
+                Some(p) if p > 0.0 => x - (x / p).round() * p,
+                _ => x,
+            };
+            DVec2::new(w(d.x, pu), w(d.y, pv)).length_squared()
+        };
+        found
+            .into_iter()
+            .filter(|uv| off(uv) <= tie)
+            .min_by(|a, b| from_hint(a).total_cmp(&from_hint(b)))
+    }
+
+    /// The grid of this face's coarse search with its surface points (empty where the search
+    /// has no range): see [`CoarseGrid`].
+    pub(crate) fn coarse_grid(&self) -> CoarseGrid {
+        let points = match self.coarse_steps() {
+            Some((range, steps)) => grid_parameters(range, steps)
+                .map(|uv| (uv, self.at(uv)))
+                .collect(),
+            None => Vec::new(),
+        };
+        CoarseGrid { points }
+    }
+
     /// For a point that should lie on the surface whose nearest point found by
     /// [`SurfaceEval::project`] is `off` away: the best few of a grid whose 3D steps are at
     /// most `off / 2` (at most [`FINE_GRID`] points, shared by the two directions in proportion
@@ -80,14 +199,16 @@ impl TrimmedFace {
     /// trim curve, a vertex of a tessellation): when the nearest point found is farther than
     /// `tol`, the range is searched again on a grid fine enough to step on every sheet nearer
     /// than that (`TrimmedFace::fine_guesses`), and the nearer result kept. Returns the
-    /// parameter and whether the fine search ran.
+    /// parameter and whether the fine search ran. The coarse search goes through `grid` when
+    /// given (the face's own [`TrimmedFace::coarse_grid`]: the same result).
     pub(crate) fn project_on(
         &self,
         p: DVec3,
         hint: Option<DVec2>,
         tol: f64,
+        grid: Option<&CoarseGrid>,
     ) -> (Option<DVec2>, bool) {
-        let first = self.project(p, hint);
+        let first = self.project_in(p, hint, grid);
         let off = |uv: &DVec2| self.point(*uv).distance(p);
         let d = first.as_ref().map_or(f64::INFINITY, off);
         if d <= tol || !d.is_finite() {
@@ -115,19 +236,32 @@ impl TrimmedFace {
         far: f64,
         fine_left: &mut bool,
     ) -> Option<DVec2> {
+        self.project_along_in(p, hint, far, fine_left, None)
+    }
+
+    /// As [`TrimmedFace::project_along`], coarse searches through `grid` when given (the
+    /// face's own [`TrimmedFace::coarse_grid`]: the same result).
+    pub(crate) fn project_along_in(
+        &self,
+        p: DVec3,
+        hint: Option<DVec2>,
+        far: f64,
+        fine_left: &mut bool,
+        grid: Option<&CoarseGrid>,
+    ) -> Option<DVec2> {
         let off = |uv: DVec2| self.point(uv).distance(p);
-        let uv = self.project(p, hint);
+        let uv = self.project_in(p, hint, grid);
         if uv.is_some_and(|uv| off(uv) <= far) {
             return uv;
         }
         let g = if *fine_left {
-            let (g, fine) = self.project_on(p, None, far);
+            let (g, fine) = self.project_on(p, None, far, grid);
             if fine && g.is_none_or(|g| off(g) > far) {
                 *fine_left = false;
             }
             g
         } else {
-            self.project(p, None)
+            self.project_in(p, None, grid)
         };
         match (uv, g) {
             (Some(a), Some(b)) if off(a) <= off(b) => Some(a),
@@ -194,7 +328,7 @@ mod tests {
             if off(face.project(p, None)) > 1e-6 {
                 coarse_wrong += 1;
             }
-            let (fine, _) = face.project_on(p, None, 1e-6);
+            let (fine, _) = face.project_on(p, None, 1e-6, None);
             if off(fine) > 1e-6 {
                 fine_wrong += 1;
             }
@@ -204,5 +338,69 @@ mod tests {
             coarse_wrong > 0,
             "the coarse search alone never failed: no test of the fine one"
         );
+    }
+
+    /// A face on `surface` with bounds around the origin (no loops: the searches need none).
+    fn face_on(surface: TruckSurface) -> TrimmedFace {
+        TrimmedFace {
+            id: 2,
+            fast: TrimmedFace::fast_surface(&surface),
+            closed: (None, None),
+            surface,
+            loops: Vec::new(),
+            domain_left: true,
+            bounds: Sphere {
+                center: DVec3::ZERO,
+                radius: 2.0,
+            },
+        }
+    }
+
+    /// Searches from scratch through a face's kept coarse grid find the very parameters its
+    /// own search finds (bit for bit): on the thread flank (a B-spline), a cone (widened grid
+    /// across its axis) and a torus, for points on, near and far from the surface.
+    #[test]
+    fn a_search_through_the_kept_grid_is_the_face_s_own_search() {
+        use truck_stepio::r#in::alias::ElementarySurface;
+        use truck_stepio::r#in::alias::re_exports::{
+            Invertible, Line, Processor, RevolutedCurve, Torus, Vector3,
+        };
+        let mut cone = Processor::new(RevolutedCurve::by_revolution(
+            Line(Point3::new(0.4, 0.0, 0.0), Point3::new(0.9, 0.0, 1.0)),
+            Point3::new(0.0, 0.0, 0.0),
+            Vector3::unit_z(),
+        ));
+        cone.invert();
+        let torus = Processor::new(Torus::new(Point3::new(0.1, 0.0, 0.0), 1.0, 0.3));
+        let elementary = |e| TruckSurface::ElementarySurface(Box::new(e));
+        let faces = [
+            thread_flank(),
+            face_on(elementary(ElementarySurface::ConicalSurface(cone))),
+            face_on(elementary(ElementarySurface::ToroidalSurface(torus))),
+        ];
+        let mut compared = 0;
+        for face in &faces {
+            let grid = face.coarse_grid();
+            assert!(!grid.points.is_empty(), "face {}: no grid", face.id);
+            for k in 0..40 {
+                let uv = DVec2::new(0.37 * k as f64, 0.23 * k as f64 - 1.0);
+                let off = DVec3::new(0.01 * k as f64, -0.02, 0.015 * (k % 7) as f64);
+                let p = face.point(uv) + off;
+                assert_eq!(
+                    face.project_in(p, None, Some(&grid)),
+                    face.project(p, None),
+                    "face {} at {p}",
+                    face.id
+                );
+                assert_eq!(
+                    face.project_on(p, None, 1e-9, Some(&grid)),
+                    face.project_on(p, None, 1e-9, None),
+                    "face {} at {p}: project_on",
+                    face.id
+                );
+                compared += 1;
+            }
+        }
+        assert_eq!(compared, 120);
     }
 }
