@@ -371,18 +371,18 @@ struct PatchLabels {
     groups: Vec<crate::model::mesh::TriGroup>,
 }
 
-/// The welded mesh's patches and their groups (hierarchies not built), its bounding box and
-/// warnings.
-fn mesh_parts(
-    mut m: TriMesh,
-    patch_triangles: usize,
-) -> (
+/// What [`mesh_parts`] returns: patches, their groups, labels, bounding box, warnings.
+type MeshParts = (
     Vec<MeshPatch>,
     Vec<GroupPart>,
     PatchLabels,
     (glam::DVec3, glam::DVec3),
     Vec<String>,
-) {
+);
+
+/// The welded mesh's patches and their groups (hierarchies not built), its bounding box and
+/// warnings.
+fn mesh_parts(mut m: TriMesh, patch_triangles: usize) -> MeshParts {
     let dropped = m.weld();
     let mut warnings = std::mem::take(&mut m.warnings);
     if dropped > 0 {
