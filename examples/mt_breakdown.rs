@@ -4,12 +4,16 @@
 //! hierarchies' cuts draw, split into those with a corner on a patch border loop (the outer
 //! border between patches), on a seam (a border inside the patch: vertices split by their
 //! normals or UVs, an edge used once there), and interior ones; the same for the hierarchies
-//! before arc collapse (`reduce`), and for one hierarchy of the whole mesh (no patches), so
-//! the cost of the partition, of the seams and of the reduction can be read apart.
+//! before arc collapse (`reduce`), for one hierarchy of the whole mesh (no patches), so
+//! the cost of the partition, of the seams and of the reduction can be read apart, and for
+//! the patches with their coarse groups as loading makes them (`prep::groups`: the units an
+//! export at that tolerance draws).
 
 use std::collections::HashSet;
 
+use patchwork::model::PatchSurface;
 use patchwork::model::mesh::{MeshPatch, border_loops};
+use patchwork::mt::group::Unit;
 use patchwork::mt::{DEFAULT_ARC_SIZE, MAX_MERGE_ERROR_RATIO, MtHierarchy};
 use rayon::prelude::*;
 
@@ -120,6 +124,14 @@ fn main() {
         })
         .collect();
     let whole = MtHierarchy::build(&mesh.positions, &mesh.triangles);
+    // The scene as loading makes it: patches and their coarse groups (`prep::groups`).
+    let grouped = patchwork::prep::mesh_scene(
+        mesh.clone(),
+        patchwork::prep::DEFAULT_PATCH_TRIANGLES,
+        DEFAULT_ARC_SIZE,
+        patchwork::model::UpAxis::Y,
+        &patchwork::prep::NoProgress,
+    );
     let whole_class = classify(&mesh.triangles, &[]);
     let (lo, hi) = patchwork::model::bounding_box(mesh.positions.iter().map(|v| v.as_dvec3()))
         .unwrap_or_default();
@@ -154,6 +166,33 @@ fn main() {
             tris as f64 / arcs as f64
         );
         show("patches, built (no reduce)", sum(&built));
+        let units = grouped.mesh_units(&mut |_| eps);
+        let mut cut = Vec::new();
+        let (mut tris, mut groups) = (0, [0usize; 3]);
+        for &u in &units {
+            let h = match u {
+                Unit::Patch(p) => match &grouped.patches[p as usize].surface {
+                    PatchSurface::Mesh(m) => &m.hierarchy,
+                    _ => continue,
+                },
+                Unit::Group(g) => {
+                    let g = &grouped.mesh_groups[g as usize];
+                    groups[(g.level as usize).min(2)] += 1;
+                    &g.patch.hierarchy
+                }
+            };
+            h.cut(eps, &mut cut);
+            tris += cut.len();
+        }
+        println!(
+            "  {:<28} {tris:>7} triangles: {} units drawn ({} patches, {} level-1 groups, {} \
+             level-2 groups)",
+            "patches + groups",
+            units.len(),
+            units.len() - groups[1] - groups[2],
+            groups[1],
+            groups[2]
+        );
         show(
             "whole mesh, one hierarchy",
             count(&whole, &whole_class.0, &whole_class.1, eps),

@@ -17,6 +17,7 @@
 //! failed are left out silently (their [`PatchMesh::failure`] is not reported), and no mesh is
 //! de-duplicated beyond the `(part, shell)` key.
 
+use std::borrow::Cow;
 use std::collections::HashMap;
 
 use glam::DMat4;
@@ -136,6 +137,39 @@ fn face_eps(scene: &Scene, view: &View, p: &Patch, tolerance: Tolerance) -> f64 
     }
 }
 
+/// The patches to tessellate with their ε: every patch, except that a mesh's coarse groups
+/// ([`Scene::mesh_groups`]) stand for their members where the ε wanted for the group (the
+/// tolerance, or the pixel error over the group's bounds) reaches its switch error.
+fn drawn<'a>(scene: &'a Scene, view: &View, tolerance: Tolerance) -> Vec<(Cow<'a, Patch>, f64)> {
+    use crate::mt::group::Unit;
+    let group_eps = |g: usize| match tolerance {
+        // Group patches are unplaced (scale 1), as mesh patches are.
+        Tolerance::Absolute(tol) => tol,
+        Tolerance::PixelError(px) => view.eps_obj(&scene.mesh_groups[g].bounds, px),
+    };
+    let mut eps = |u: Unit| match u {
+        Unit::Patch(p) => face_eps(scene, view, &scene.patches[p as usize], tolerance),
+        Unit::Group(g) => group_eps(g as usize),
+    };
+    if scene.mesh_groups.is_empty() {
+        return (scene.patches.iter())
+            .map(|p| (Cow::Borrowed(p), face_eps(scene, view, p, tolerance)))
+            .collect();
+    }
+    (scene.mesh_units(&mut eps).into_iter())
+        .map(|u| match u {
+            Unit::Patch(p) => {
+                let p = &scene.patches[p as usize];
+                (Cow::Borrowed(p), face_eps(scene, view, p, tolerance))
+            }
+            Unit::Group(g) => (
+                Cow::Owned(scene.mesh_group_patch(g as usize)),
+                group_eps(g as usize),
+            ),
+        })
+        .collect()
+}
+
 /// Tessellates `scene` into meshes (one per shell) and nodes (one per placement); see the
 /// module documentation.
 pub fn assemble(scene: &Scene, opts: &ExportOptions) -> Result<ExportScene, ExportError> {
@@ -160,10 +194,10 @@ pub fn assemble(scene: &Scene, opts: &ExportOptions) -> Result<ExportScene, Expo
         }],
         by_path: HashMap::new(),
     };
-    let mut by_instance: Vec<Vec<&Patch>> = vec![Vec::new(); scene.instances.len()];
-    for p in &scene.patches {
+    let mut by_instance: Vec<Vec<(Cow<'_, Patch>, f64)>> = vec![Vec::new(); scene.instances.len()];
+    for (p, eps) in drawn(scene, &view, opts.tolerance) {
         if let Some(list) = by_instance.get_mut(p.instance as usize) {
-            list.push(p);
+            list.push((p, eps));
         }
     }
     let mut meshes = Vec::new();
@@ -187,11 +221,11 @@ pub fn assemble(scene: &Scene, opts: &ExportOptions) -> Result<ExportScene, Expo
                     name: part_name.clone(),
                     ..ExportMesh::default()
                 };
-                for p in patches {
-                    let eps = face_eps(scene, &view, p, opts.tolerance);
+                for (p, eps) in patches {
+                    let eps = *eps;
                     let local = Patch {
                         transform: DMat4::IDENTITY,
-                        ..(*p).clone()
+                        ..Patch::clone(p)
                     };
                     let mut m = PatchMesh::default();
                     t.patch(&local, eps, &mut m);

@@ -72,6 +72,12 @@ fn a_second_load_reads_the_hierarchies_the_first_built() {
     assert!(second.pending.is_none(), "the cache was not used");
     assert!(second.warnings.is_empty(), "{:?}", second.warnings);
     assert!(meshes(&second.scene) == built, "cached ≠ built");
+    // The coarse groups' hierarchies are cached too (`prep::groups`).
+    assert!(!first.scene.mesh_groups.is_empty(), "no groups");
+    assert!(
+        second.scene.mesh_groups == first.scene.mesh_groups,
+        "cached groups ≠ built"
+    );
 }
 
 #[test]
@@ -160,6 +166,13 @@ fn full_resolution_first_then_the_same_hierarchies_as_a_build() {
     assert!(
         meshes(&built.scene) == meshes(&direct),
         "built later ≠ built at load"
+    );
+    // Groups without their hierarchies are never drawn; built later, they are as at load.
+    assert!(!loaded.scene.mesh_groups.is_empty(), "no groups");
+    assert!((loaded.scene.mesh_groups.iter()).all(|g| g.links.switch_error == f64::INFINITY));
+    assert!(
+        built.scene.mesh_groups == direct.mesh_groups,
+        "groups built later ≠ built at load"
     );
     assert_eq!(built.scene.patches.len(), loaded.scene.patches.len());
     // And it went to the cache.

@@ -84,6 +84,7 @@ pub fn merge(files: Vec<Named>) -> Result<Merged, MergeError> {
         skipped: Vec::new(),
         warnings: Vec::new(),
         unit: common,
+        mesh_groups: Vec::new(),
     };
     let mut boxes = Vec::new();
     for Named { name, scene } in files {

@@ -171,6 +171,21 @@ pub struct MeshPatch {
     pub hierarchy: crate::mt::MtHierarchy,
 }
 
+/// A coarse group of a mesh's patches (issue 30; [`crate::mt::group`]): one patch made of
+/// its members' original triangles with its own hierarchy, drawn instead of them from its
+/// switch error on ([`crate::mt::group::select`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshGroup {
+    pub patch: std::sync::Arc<MeshPatch>,
+    /// What it stands for and from which error it is drawn (`f64::INFINITY` until its
+    /// hierarchy is built).
+    pub links: crate::mt::group::GroupLinks,
+    /// Bounding sphere of its vertices.
+    pub bounds: super::Sphere,
+    /// 1: a group of patches, 2: a group of level-1 groups (and maybe lone patches), …
+    pub level: u32,
+}
+
 impl MeshPatch {
     /// Builds the patch's MT hierarchy ([`crate::mt`]) and reduces it by arc collapses to
     /// `arc_size` triangles per arc on average (no reduction below 1.5), merging only nodes

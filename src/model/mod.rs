@@ -189,6 +189,9 @@ pub struct Scene {
     /// The length unit of the coordinates when the format states one (`"mm"`: STEP, scaled
     /// to millimetres; `"m"`: glTF); `None` when it does not (`.bpt`, OBJ, PLY, STL).
     pub unit: Option<&'static str>,
+    /// Coarse groups of a mesh's patches ([`mesh::MeshGroup`], members before their groups);
+    /// empty for other scenes and after patches are renumbered (selection, merging).
+    pub mesh_groups: Vec<mesh::MeshGroup>,
 }
 
 impl Scene {
@@ -249,12 +252,48 @@ impl Scene {
             skipped: Vec::new(),
             warnings,
             unit: None,
+            mesh_groups: Vec::new(),
         }
     }
 
     /// Length of the diagonal of [`Scene::bbox`].
     pub fn bbox_diagonal(&self) -> f64 {
         self.bbox.0.distance(self.bbox.1)
+    }
+
+    /// The mesh units to draw when `eps(unit)` is the error wanted for each
+    /// ([`crate::mt::group::select`] over [`Scene::mesh_groups`]): every patch exactly once,
+    /// by itself or by one group holding it. Without groups: every patch.
+    pub fn mesh_units(
+        &self,
+        eps: &mut dyn FnMut(crate::mt::group::Unit) -> f64,
+    ) -> Vec<crate::mt::group::Unit> {
+        use crate::mt::group;
+        let links: Vec<group::GroupLinks> =
+            self.mesh_groups.iter().map(|g| g.links.clone()).collect();
+        let roots = group::roots(&links, self.patches.len());
+        let mut out = Vec::with_capacity(roots.len());
+        group::select(&links, &roots, eps, &mut out);
+        out
+    }
+
+    /// Group `g` of [`Scene::mesh_groups`] as a patch to tessellate: its first patch's part,
+    /// colour and instance, the group's surface and bounds, id `patches.len() + g`.
+    pub fn mesh_group_patch(&self, g: usize) -> Patch {
+        let group = &self.mesh_groups[g];
+        let mut first = group.links.members[0];
+        while let crate::mt::group::Unit::Group(h) = first {
+            first = self.mesh_groups[h as usize].links.members[0];
+        }
+        let crate::mt::group::Unit::Patch(p) = first else {
+            unreachable!("the loop ends on a patch")
+        };
+        Patch {
+            id: (self.patches.len() + g) as u32,
+            bounds: group.bounds,
+            surface: PatchSurface::Mesh(group.patch.clone()),
+            ..self.patches[p as usize].clone()
+        }
     }
 }
 

@@ -98,6 +98,8 @@ impl Scene {
             skipped: self.skipped.clone(),
             warnings: self.warnings.clone(),
             unit: self.unit,
+            // Groups name patches by their old numbers: dropped (the patches draw alone).
+            mesh_groups: Vec::new(),
         }
     }
 }

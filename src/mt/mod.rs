@@ -32,6 +32,7 @@
 mod bound;
 mod build;
 mod cut;
+pub mod group;
 mod reduce;
 
 /// Triangles per arc the hierarchies of loaded meshes are reduced to (see the Table-1 bench
@@ -215,7 +216,7 @@ impl MtHierarchy {
 
 /// Meshes and measures shared by the tests of the hierarchy's modules.
 #[cfg(test)]
-mod fixtures {
+pub(crate) mod fixtures {
     use std::collections::HashMap;
 
     use glam::{DVec3, Vec3};
@@ -280,7 +281,7 @@ mod fixtures {
     /// Two-sided Hausdorff distance between two triangle sets over `pos`, measured densely:
     /// every triangle sampled on a barycentric grid of `k` steps per edge ((k+1)(k+2)/2
     /// points), independent of the 7 samples the build uses.
-    pub(super) fn dense_hausdorff(pos: &[DVec3], x: &[[u32; 3]], y: &[[u32; 3]], k: u32) -> f64 {
+    pub(crate) fn dense_hausdorff(pos: &[DVec3], x: &[[u32; 3]], y: &[[u32; 3]], k: u32) -> f64 {
         two_sided(pos, x, y, |[a, b, c]| {
             (0..=k)
                 .flat_map(|i| (0..=k - i).map(move |j| (i, j)))

@@ -6,6 +6,7 @@
 //! Long steps report to a [`Progress`] the caller passes (the binary draws a bar); the
 //! library itself prints nothing.
 
+pub mod groups;
 pub mod partition;
 pub mod step;
 
@@ -18,9 +19,11 @@ pub use partition::partition;
 
 use crate::io::mt_cache::{self, CacheKey};
 use crate::io::{LoadError, Model};
-use crate::model::mesh::{MeshPatch, TriMesh};
+use crate::model::mesh::{MeshGroup, MeshPatch, TriMesh};
 use crate::model::{Patch, PatchSurface, Scene, Sphere, UpAxis, bounding_box};
 use crate::mt::MtHierarchy;
+use crate::mt::group::{GroupLinks, Unit};
+use groups::GroupPart;
 
 /// Triangles per patch when a mesh is split into patches (the 1–2 k).
 pub const DEFAULT_PATCH_TRIANGLES: usize = 1500;
@@ -72,6 +75,7 @@ pub struct Loaded {
 #[derive(Clone, Debug, PartialEq)]
 pub struct PendingHierarchies {
     arc_size: f64,
+    patch_triangles: usize,
     cache: Option<(PathBuf, CacheKey)>,
 }
 
@@ -104,6 +108,15 @@ impl PendingHierarchies {
                     bar.advance();
                 }
             });
+            let patches: Vec<&MeshPatch> = mesh_patches_of(&scene);
+            let mut groups: Vec<(MeshPatch, Vec<Unit>, u32)> = (scene.mesh_groups.iter())
+                .map(|g| (MeshPatch::clone(&g.patch), g.links.members.clone(), g.level))
+                .collect();
+            groups
+                .par_iter_mut()
+                .for_each(|(p, _, _)| p.build_hierarchy(self.arc_size));
+            let groups = finish_groups(&patches, groups, self.patch_triangles);
+            scene.mesh_groups = groups;
         }
         let mut warnings = Vec::new();
         if let Some((dir, key)) = &self.cache {
@@ -116,11 +129,55 @@ impl PendingHierarchies {
     }
 }
 
+/// The hierarchies a mesh scene caches: its patches', then its groups'.
 fn mesh_hierarchies(scene: &Scene) -> impl Iterator<Item = &MtHierarchy> {
-    scene.patches.iter().filter_map(|p| match &p.surface {
+    let patches = scene.patches.iter().filter_map(|p| match &p.surface {
         PatchSurface::Mesh(m) => Some(&m.hierarchy),
         _ => None,
-    })
+    });
+    patches.chain(scene.mesh_groups.iter().map(|g| &g.patch.hierarchy))
+}
+
+/// The mesh patches of a scene, by patch id (a mesh scene's patches are all meshes).
+fn mesh_patches_of(scene: &Scene) -> Vec<&MeshPatch> {
+    (scene.patches.iter())
+        .filter_map(|p| match &p.surface {
+            PatchSurface::Mesh(m) => Some(&**m),
+            _ => None,
+        })
+        .collect()
+}
+
+/// The scene's groups from built group patches (members before groups): each one's bounds
+/// and switch error ([`crate::mt::group::switch_error`] against its members' hierarchies,
+/// one patch's `patch_triangles` as the target).
+fn finish_groups(
+    patches: &[&MeshPatch],
+    groups: Vec<(MeshPatch, Vec<Unit>, u32)>,
+    patch_triangles: usize,
+) -> Vec<MeshGroup> {
+    let mut out: Vec<MeshGroup> = Vec::with_capacity(groups.len());
+    for (patch, members, level) in groups {
+        let switch_error = {
+            let theirs: Vec<&MtHierarchy> = (members.iter())
+                .map(|&m| match m {
+                    Unit::Patch(p) => &patches[p as usize].hierarchy,
+                    Unit::Group(g) => &out[g as usize].patch.hierarchy,
+                })
+                .collect();
+            crate::mt::group::switch_error(&patch.hierarchy, &theirs, patch_triangles)
+        };
+        out.push(MeshGroup {
+            bounds: Sphere::around(patch.positions.iter().map(|v| v.as_dvec3())),
+            patch: Arc::new(patch),
+            links: GroupLinks {
+                members,
+                switch_error,
+            },
+            level,
+        });
+    }
+    out
 }
 
 /// Reads and prepares a model (see [`crate::io::read`] for the formats), building every
@@ -183,12 +240,20 @@ pub fn load_with_options(
             }
         }
     });
-    let (parts, labels, bbox, weld_warnings) = mesh_parts(mesh, patch_triangles);
-    let counts: Vec<usize> = parts.iter().map(|p| p.positions.len()).collect();
+    let (parts, group_parts, labels, bbox, weld_warnings) = mesh_parts(mesh, patch_triangles);
+    let counts: Vec<usize> = (parts.iter().chain(group_parts.iter().map(|g| &g.patch)))
+        .map(|p| p.positions.len())
+        .collect();
     let cached = cache
         .as_ref()
         .and_then(|(dir, key)| match mt_cache::read(dir, *key, &counts) {
-            Ok(Some(hs)) if hs.iter().zip(&parts).all(|(h, p)| same_originals(h, p)) => Some(hs),
+            Ok(Some(hs))
+                if (hs.iter())
+                    .zip(parts.iter().chain(group_parts.iter().map(|g| &g.patch)))
+                    .all(|(h, p)| same_originals(h, p)) =>
+            {
+                Some(hs)
+            }
             Ok(Some(_)) => {
                 warnings.push(format!(
                     "{}: hierarchy cache refused: it does not match the patches; rebuilt",
@@ -202,38 +267,65 @@ pub fn load_with_options(
                 None
             }
         });
-    let pending = PendingHierarchies { arc_size, cache };
-    let (parts, pending) = match (cached, options.hierarchies) {
+    let pending = PendingHierarchies {
+        arc_size,
+        patch_triangles,
+        cache,
+    };
+    let (parts, groups, pending) = match (cached, options.hierarchies) {
         (Some(hs), _) => {
-            let parts = parts
-                .into_iter()
-                .zip(hs)
+            let mut hs = hs.into_iter();
+            let parts: Vec<MeshPatch> = (parts.into_iter().zip(hs.by_ref()))
                 .map(|(p, hierarchy)| MeshPatch { hierarchy, ..p })
                 .collect();
-            (parts, None)
+            let groups = (group_parts.into_iter().zip(hs))
+                .map(|(g, hierarchy)| GroupPart {
+                    patch: MeshPatch {
+                        hierarchy,
+                        ..g.patch
+                    },
+                    ..g
+                })
+                .collect();
+            (parts, groups, None)
         }
         (None, Hierarchies::Build) => {
-            let parts = build_hierarchies(parts, arc_size, progress);
+            let (parts, groups) = build_hierarchies(parts, group_parts, arc_size, progress);
             if let Some((dir, key)) = &pending.cache {
-                let hs: Vec<&MtHierarchy> = parts.iter().map(|p| &p.hierarchy).collect();
+                let hs: Vec<&MtHierarchy> = (parts.iter())
+                    .map(|p| &p.hierarchy)
+                    .chain(groups.iter().map(|g| &g.patch.hierarchy))
+                    .collect();
                 if let Err(e) = mt_cache::write(dir, *key, &hs) {
                     warnings.push(e.to_string());
                 }
             }
-            (parts, None)
+            (parts, groups, None)
         }
         (None, Hierarchies::CachedOrOriginal) => {
-            let parts = parts
-                .into_iter()
-                .map(|p| MeshPatch {
-                    hierarchy: MtHierarchy::original(&p.triangles, p.positions.len()),
-                    ..p
+            let original = |p: MeshPatch| MeshPatch {
+                hierarchy: MtHierarchy::original(&p.triangles, p.positions.len()),
+                ..p
+            };
+            let parts = parts.into_iter().map(original).collect();
+            let groups = (group_parts.into_iter())
+                .map(|g| GroupPart {
+                    patch: original(g.patch),
+                    ..g
                 })
                 .collect();
-            (parts, Some(pending))
+            (parts, groups, Some(pending))
         }
     };
-    let mut scene = scene_of(parts, &labels, UpAxis::Y, bbox, weld_warnings);
+    let mut scene = scene_of(
+        parts,
+        groups,
+        &labels,
+        UpAxis::Y,
+        bbox,
+        weld_warnings,
+        patch_triangles,
+    );
     scene.unit = crate::io::stated_unit(path);
     Ok(Loaded {
         scene,
@@ -268,9 +360,9 @@ pub fn mesh_scene(
     up: UpAxis,
     progress: &dyn Progress,
 ) -> Scene {
-    let (parts, labels, bbox, warnings) = mesh_parts(m, patch_triangles);
-    let parts = build_hierarchies(parts, arc_size, progress);
-    scene_of(parts, &labels, up, bbox, warnings)
+    let (parts, groups, labels, bbox, warnings) = mesh_parts(m, patch_triangles);
+    let (parts, groups) = build_hierarchies(parts, groups, arc_size, progress);
+    scene_of(parts, groups, &labels, up, bbox, warnings, patch_triangles)
 }
 
 /// What the patches of a mesh belong to: the part names and each patch's group.
@@ -279,16 +371,18 @@ struct PatchLabels {
     groups: Vec<crate::model::mesh::TriGroup>,
 }
 
-/// The welded mesh's patches (hierarchies not built), its bounding box and warnings.
-fn mesh_parts(
-    mut m: TriMesh,
-    patch_triangles: usize,
-) -> (
+/// What [`mesh_parts`] returns: patches, their groups, labels, bounding box, warnings.
+type MeshParts = (
     Vec<MeshPatch>,
+    Vec<GroupPart>,
     PatchLabels,
     (glam::DVec3, glam::DVec3),
     Vec<String>,
-) {
+);
+
+/// The welded mesh's patches and their groups (hierarchies not built), its bounding box and
+/// warnings.
+fn mesh_parts(mut m: TriMesh, patch_triangles: usize) -> MeshParts {
     let dropped = m.weld();
     let mut warnings = std::mem::take(&mut m.warnings);
     if dropped > 0 {
@@ -306,35 +400,57 @@ fn mesh_parts(
             let t = p.source_triangles.first().copied().unwrap_or(0) as usize;
             m.group(of_triangle.get(t).copied().unwrap_or(0))
         })
+        .collect::<Vec<crate::model::mesh::TriGroup>>();
+    let keys: Vec<groups::GroupKey> = (groups.iter())
+        .map(|g| (g.part, g.color.map(|c| c.map(f32::to_bits))))
         .collect();
+    let group_parts = groups::group_parts(
+        &m,
+        &patches,
+        &keys,
+        groups::UNITS_PER_GROUP,
+        groups::GROUP_LEVELS,
+    );
     let labels = PatchLabels {
         part_names: std::mem::take(&mut m.part_names),
         groups,
     };
-    (patches, labels, bbox, warnings)
+    (patches, group_parts, labels, bbox, warnings)
 }
 
-/// Every patch's hierarchy built and reduced to `arc_size`, on rayon.
+/// Every patch's and group's hierarchy built and reduced to `arc_size`, on rayon (the
+/// groups, largest first, in the same pool as the patches).
 fn build_hierarchies(
     mut parts: Vec<MeshPatch>,
+    mut groups: Vec<GroupPart>,
     arc_size: f64,
     progress: &dyn Progress,
-) -> Vec<MeshPatch> {
+) -> (Vec<MeshPatch>, Vec<GroupPart>) {
     use rayon::prelude::*;
-    let bar = Bar::begin(progress, "patch hierarchies", parts.len(), 20);
-    parts.par_iter_mut().for_each(|p| {
+    let bar = Bar::begin(
+        progress,
+        "patch hierarchies",
+        parts.len() + groups.len(),
+        20,
+    );
+    let mut all: Vec<&mut MeshPatch> = groups.iter_mut().map(|g| &mut g.patch).collect();
+    all.sort_by_key(|p| std::cmp::Reverse(p.triangles.len()));
+    all.extend(parts.iter_mut());
+    all.par_iter_mut().with_max_len(1).for_each(|p| {
         p.build_hierarchy(arc_size);
         bar.advance();
     });
-    parts
+    (parts, groups)
 }
 
 fn scene_of(
     parts: Vec<MeshPatch>,
+    groups: Vec<GroupPart>,
     labels: &PatchLabels,
     up: UpAxis,
     bbox: (glam::DVec3, glam::DVec3),
     warnings: Vec<String>,
+    patch_triangles: usize,
 ) -> Scene {
     let named = !labels.part_names.is_empty();
     let patches: Vec<Patch> = parts
@@ -357,6 +473,11 @@ fn scene_of(
         })
         .collect();
     let mut scene = Scene::single_part(patches, up, bbox, warnings);
+    let groups = groups
+        .into_iter()
+        .map(|g| (g.patch, g.members, g.level))
+        .collect();
+    scene.mesh_groups = finish_groups(&mesh_patches_of(&scene), groups, patch_triangles);
     if named {
         scene.parts = (labels.part_names.iter())
             .map(|name| crate::model::Part { name: name.clone() })

@@ -190,6 +190,7 @@ pub fn assemble(model: StepModel, progress: &dyn Progress) -> Result<Scene, Load
         skipped,
         warnings,
         unit: Some("mm"),
+        mesh_groups: Vec::new(),
     })
 }
 

@@ -1,0 +1,210 @@
+//! Coarse patch groups of mesh scenes (issue 30; `mt::group`, `prep::groups`): an export at
+//! a tolerance draws every patch exactly once — alone or inside one drawn group — and stays
+//! within the tolerance of the original surface; coarse tolerances draw groups and fewer
+//! triangles than the patches alone would.
+
+use glam::{DVec3, Vec3};
+use patchwork::export::{ExportOptions, Tolerance, assemble};
+use patchwork::model::mesh::TriMesh;
+use patchwork::model::{PatchSurface, Scene, UpAxis};
+use patchwork::mt::group::Unit;
+
+/// A bumpy sphere: an icosahedron subdivided `levels` times, radius 1 + 0.08 sin(5x) cos(4y).
+fn bumpy_sphere(levels: u32) -> TriMesh {
+    let t = (1.0 + 5f32.sqrt()) / 2.0;
+    let mut p: Vec<Vec3> = [
+        [-1.0, t, 0.0],
+        [1.0, t, 0.0],
+        [-1.0, -t, 0.0],
+        [1.0, -t, 0.0],
+        [0.0, -1.0, t],
+        [0.0, 1.0, t],
+        [0.0, -1.0, -t],
+        [0.0, 1.0, -t],
+        [t, 0.0, -1.0],
+        [t, 0.0, 1.0],
+        [-t, 0.0, -1.0],
+        [-t, 0.0, 1.0],
+    ]
+    .map(|v| Vec3::from(v).normalize())
+    .to_vec();
+    let mut f: Vec<[u32; 3]> = vec![
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
+    ];
+    for _ in 0..levels {
+        let mut mid = std::collections::HashMap::new();
+        let mut next = Vec::with_capacity(f.len() * 4);
+        for [a, b, c] in f {
+            let mut m = |x: u32, y: u32| {
+                *mid.entry((x.min(y), x.max(y))).or_insert_with(|| {
+                    p.push(((p[x as usize] + p[y as usize]) * 0.5).normalize());
+                    p.len() as u32 - 1
+                })
+            };
+            let (ab, bc, ca) = (m(a, b), m(b, c), m(c, a));
+            next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
+        }
+        f = next;
+    }
+    let positions = p
+        .iter()
+        .map(|v| *v * (1.0 + 0.08 * (5.0 * v.x).sin() * (4.0 * v.y).cos()))
+        .collect();
+    TriMesh {
+        positions,
+        triangles: f,
+        ..TriMesh::default()
+    }
+}
+
+fn scene() -> (Scene, TriMesh) {
+    let mesh = bumpy_sphere(4);
+    let scene = patchwork::prep::mesh_scene(
+        mesh.clone(),
+        100,
+        patchwork::mt::DEFAULT_ARC_SIZE,
+        UpAxis::Y,
+        &patchwork::prep::NoProgress,
+    );
+    (scene, mesh)
+}
+
+/// The hierarchy of a unit.
+fn hierarchy(scene: &Scene, u: Unit) -> &patchwork::mt::MtHierarchy {
+    match u {
+        Unit::Patch(p) => match &scene.patches[p as usize].surface {
+            PatchSurface::Mesh(m) => &m.hierarchy,
+            _ => panic!("a mesh scene"),
+        },
+        Unit::Group(g) => &scene.mesh_groups[g as usize].patch.hierarchy,
+    }
+}
+
+/// The patches of a unit.
+fn patches_of(scene: &Scene, u: Unit, out: &mut Vec<u32>) {
+    match u {
+        Unit::Patch(p) => out.push(p),
+        Unit::Group(g) => {
+            for &m in &scene.mesh_groups[g as usize].links.members {
+                patches_of(scene, m, out);
+            }
+        }
+    }
+}
+
+/// Largest distance from points on `from` (corners, centroids and edge midpoints) to the
+/// triangles `to`.
+fn one_sided(from: (&[DVec3], &[[u32; 3]]), to: (&[DVec3], &[[u32; 3]])) -> f64 {
+    let mut worst = 0.0f64;
+    for t in from.1 {
+        let [a, b, c] = t.map(|i| from.0[i as usize]);
+        for q in [
+            a,
+            b,
+            c,
+            (a + b + c) / 3.0,
+            (a + b) / 2.0,
+            (b + c) / 2.0,
+            (c + a) / 2.0,
+        ] {
+            let d =
+                to.1.iter()
+                    .map(|s| {
+                        let [x, y, z] = s.map(|i| to.0[i as usize]);
+                        patchwork::geom::point_triangle_distance(q, x, y, z)
+                    })
+                    .fold(f64::INFINITY, f64::min);
+            worst = worst.max(d);
+        }
+    }
+    worst
+}
+
+#[test]
+fn an_export_draws_every_patch_once_within_its_tolerance() {
+    let (scene, mesh) = scene();
+    assert!(scene.patches.len() >= 30, "{} patches", scene.patches.len());
+    assert!(scene.mesh_groups.iter().any(|g| g.level == 2), "two levels");
+    let diagonal = scene.bbox_diagonal();
+    let original: Vec<DVec3> = mesh.positions.iter().map(|v| v.as_dvec3()).collect();
+    let mut some_group = false;
+    let mut mixed = false;
+    for rel in [2e-3, 5e-3, 1e-2, 2e-2, 5e-2] {
+        let tol = rel * diagonal;
+        let units = scene.mesh_units(&mut |_| tol);
+        // Exactly once: never a group and its member, never neither.
+        let mut covered = Vec::new();
+        for &u in &units {
+            patches_of(&scene, u, &mut covered);
+        }
+        covered.sort_unstable();
+        let all: Vec<u32> = (0..scene.patches.len() as u32).collect();
+        assert_eq!(covered, all, "at {rel}: {units:?}");
+        let groups = units.iter().filter(|u| matches!(u, Unit::Group(_))).count();
+        some_group |= groups > 0;
+        mixed |= groups > 0 && groups < units.len();
+        // The export draws exactly the cuts of those units, and no more.
+        let options = ExportOptions {
+            tolerance: Tolerance::Absolute(tol),
+            ..ExportOptions::default()
+        };
+        let out = assemble(&scene, &options).expect("the export assembles");
+        let drawn: usize = out.meshes.iter().map(|m| m.indices.len() / 3).sum();
+        let mut cut = Vec::new();
+        let expected: usize = units
+            .iter()
+            .map(|&u| {
+                hierarchy(&scene, u).cut(tol, &mut cut);
+                cut.len()
+            })
+            .sum();
+        assert_eq!(drawn, expected, "at {rel}");
+        let patches_alone: usize = (0..scene.patches.len() as u32)
+            .map(|p| {
+                hierarchy(&scene, Unit::Patch(p)).cut(tol, &mut cut);
+                cut.len()
+            })
+            .sum();
+        assert!(
+            drawn <= patches_alone,
+            "at {rel}: {drawn} > {patches_alone}"
+        );
+        // Within the tolerance of the original, both ways (the exported vertices are the
+        // original's, in the model's frame).
+        let m = &out.meshes[0];
+        let pos: Vec<DVec3> = m
+            .positions
+            .iter()
+            .map(|p| DVec3::from(p.map(f64::from)))
+            .collect();
+        let tris: Vec<[u32; 3]> = m.indices.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
+        let there = one_sided((&pos, &tris), (&original, &mesh.triangles));
+        let back = one_sided((&original, &mesh.triangles), (&pos, &tris));
+        // f32 positions: a little slack.
+        assert!(
+            there.max(back) <= tol * (1.0 + 1e-4) + 1e-6,
+            "at {rel}: {there:.3e} / {back:.3e} > {tol:.3e}"
+        );
+    }
+    assert!(some_group, "no tolerance drew a group");
+    assert!(mixed, "no tolerance drew groups beside patches");
+}
