@@ -138,6 +138,7 @@ fn main() {
         patchwork::prep::DEFAULT_PATCH_TRIANGLES,
         0.0,
         UpAxis::Y,
+        false,
         &patchwork::prep::NoProgress,
     );
     let build = t.elapsed().as_secs_f64();

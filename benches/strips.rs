@@ -151,6 +151,7 @@ fn main() {
         1500,
         0.0,
         UpAxis::Y,
+        false,
         &patchwork::prep::NoProgress,
     );
     let build_s = t.elapsed().as_secs_f64();
@@ -254,6 +255,7 @@ fn main() {
         1500,
         patchwork::mt::DEFAULT_ARC_SIZE,
         UpAxis::Y,
+        false,
         &patchwork::prep::NoProgress,
     );
     let patches = mesh_patches(&scene);

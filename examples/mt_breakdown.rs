@@ -130,6 +130,7 @@ fn main() {
         patchwork::prep::DEFAULT_PATCH_TRIANGLES,
         DEFAULT_ARC_SIZE,
         patchwork::model::UpAxis::Y,
+        true,
         &patchwork::prep::NoProgress,
     );
     let whole_class = classify(&mesh.triangles, &[]);

@@ -59,7 +59,9 @@ fn cache_files(cache: &Path) -> Vec<PathBuf> {
 fn a_second_load_reads_the_hierarchies_the_first_built() {
     let (model, cache) = dirs("second");
     write_grid(&model, 60, 0.2); // 7 200 triangles: several patches
-    let build = LoadOptions::new(Hierarchies::Build, Some(cache.clone()));
+    // (With the coarse groups export builds, so they are cached too.)
+    let mut build = LoadOptions::new(Hierarchies::Build, Some(cache.clone()));
+    build.groups = true;
     let first = load_with_options(&model, &build, &NoProgress).expect("loads");
     assert!(first.warnings.is_empty(), "{:?}", first.warnings);
     assert!(first.pending.is_none());
@@ -67,7 +69,8 @@ fn a_second_load_reads_the_hierarchies_the_first_built() {
     assert!(built.len() > 2 && built.iter().all(|m| !m.hierarchy.is_original()));
     assert_eq!(cache_files(&cache).len(), 1);
     // Read back: the same hierarchies, even when asked not to build.
-    let lazy = LoadOptions::new(Hierarchies::CachedOrOriginal, Some(cache.clone()));
+    let mut lazy = LoadOptions::new(Hierarchies::CachedOrOriginal, Some(cache.clone()));
+    lazy.groups = true;
     let second = load_with_options(&model, &lazy, &NoProgress).expect("loads");
     assert!(second.pending.is_none(), "the cache was not used");
     assert!(second.warnings.is_empty(), "{:?}", second.warnings);
@@ -139,7 +142,8 @@ fn a_corrupt_cache_file_is_refused_with_a_warning_and_rebuilt() {
 fn full_resolution_first_then_the_same_hierarchies_as_a_build() {
     let (model, cache) = dirs("pending");
     write_grid(&model, 50, 0.2);
-    let lazy = LoadOptions::new(Hierarchies::CachedOrOriginal, Some(cache.clone()));
+    let mut lazy = LoadOptions::new(Hierarchies::CachedOrOriginal, Some(cache.clone()));
+    lazy.groups = true;
     let loaded = load_with_options(&model, &lazy, &NoProgress).expect("loads");
     // Every cut of the first scene is the original mesh, error 0.
     let mut cut = Vec::new();
@@ -162,7 +166,11 @@ fn full_resolution_first_then_the_same_hierarchies_as_a_build() {
             .iter()
             .all(|m| m.hierarchy.is_original())
     );
-    let direct = patchwork::prep::load(&model).expect("loads");
+    let mut at_load = LoadOptions::new(Hierarchies::Build, None);
+    at_load.groups = true;
+    let direct = load_with_options(&model, &at_load, &NoProgress)
+        .expect("loads")
+        .scene;
     assert!(
         meshes(&built.scene) == meshes(&direct),
         "built later ≠ built at load"

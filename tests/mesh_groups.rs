@@ -83,6 +83,7 @@ fn scene() -> (Scene, TriMesh) {
         100,
         patchwork::mt::DEFAULT_ARC_SIZE,
         UpAxis::Y,
+        true,
         &patchwork::prep::NoProgress,
     );
     (scene, mesh)

@@ -51,11 +51,18 @@ pub struct LoadOptions {
     pub hierarchies: Hierarchies,
     /// Directory of the hierarchy cache ([`crate::io::mt_cache`]); `None`: no cache.
     pub cache: Option<PathBuf>,
+    /// Build a mesh's coarse patch groups too ([`groups`]: `export` draws them; the frame
+    /// loop does not yet, so the other commands leave out their ~3× build cost).
+    pub groups: bool,
 }
 
 impl LoadOptions {
     pub fn new(hierarchies: Hierarchies, cache: Option<PathBuf>) -> LoadOptions {
-        LoadOptions { hierarchies, cache }
+        LoadOptions {
+            hierarchies,
+            cache,
+            groups: false,
+        }
     }
 }
 
@@ -202,6 +209,7 @@ pub fn prepare(model: Model, progress: &dyn Progress) -> Result<Scene, LoadError
             DEFAULT_PATCH_TRIANGLES,
             crate::mt::DEFAULT_ARC_SIZE,
             UpAxis::Y,
+            false,
             progress,
         ),
         Model::Step(model) => step::assemble(*model, progress)?,
@@ -230,7 +238,14 @@ pub fn load_with_options(
     let cache = options.cache.as_ref().and_then(|dir| {
         match std::fs::read(path) {
             Ok(bytes) => {
-                let key = CacheKey::new(&bytes, &[patch_triangles as u64, arc_size.to_bits()]);
+                let key = CacheKey::new(
+                    &bytes,
+                    &[
+                        patch_triangles as u64,
+                        arc_size.to_bits(),
+                        u64::from(options.groups),
+                    ],
+                );
                 Some((dir.clone(), key))
             }
             Err(e) => {
@@ -240,7 +255,8 @@ pub fn load_with_options(
             }
         }
     });
-    let (parts, group_parts, labels, bbox, weld_warnings) = mesh_parts(mesh, patch_triangles);
+    let (parts, group_parts, labels, bbox, weld_warnings) =
+        mesh_parts(mesh, patch_triangles, options.groups);
     let counts: Vec<usize> = (parts.iter().chain(group_parts.iter().map(|g| &g.patch)))
         .map(|p| p.positions.len())
         .collect();
@@ -352,15 +368,17 @@ fn same_originals(h: &MtHierarchy, p: &MeshPatch) -> bool {
 
 /// Builds a scene from a triangle mesh: welded, split into patches of about
 /// `patch_triangles` triangles ([`partition`](fn@partition)), each with its MT hierarchy reduced
-/// to `arc_size` triangles per arc (built on rayon, reported to `progress`).
+/// to `arc_size` triangles per arc (built on rayon, reported to `progress`), and with
+/// `groups` its coarse patch groups ([`groups`]) with theirs.
 pub fn mesh_scene(
     m: TriMesh,
     patch_triangles: usize,
     arc_size: f64,
     up: UpAxis,
+    groups: bool,
     progress: &dyn Progress,
 ) -> Scene {
-    let (parts, groups, labels, bbox, warnings) = mesh_parts(m, patch_triangles);
+    let (parts, groups, labels, bbox, warnings) = mesh_parts(m, patch_triangles, groups);
     let (parts, groups) = build_hierarchies(parts, groups, arc_size, progress);
     scene_of(parts, groups, &labels, up, bbox, warnings, patch_triangles)
 }
@@ -380,9 +398,9 @@ type MeshParts = (
     Vec<String>,
 );
 
-/// The welded mesh's patches and their groups (hierarchies not built), its bounding box and
-/// warnings.
-fn mesh_parts(mut m: TriMesh, patch_triangles: usize) -> MeshParts {
+/// The welded mesh's patches and, with `with_groups`, their groups (hierarchies not built),
+/// its bounding box and warnings.
+fn mesh_parts(mut m: TriMesh, patch_triangles: usize, with_groups: bool) -> MeshParts {
     let dropped = m.weld();
     let mut warnings = std::mem::take(&mut m.warnings);
     if dropped > 0 {
@@ -404,13 +422,16 @@ fn mesh_parts(mut m: TriMesh, patch_triangles: usize) -> MeshParts {
     let keys: Vec<groups::GroupKey> = (groups.iter())
         .map(|g| (g.part, g.color.map(|c| c.map(f32::to_bits))))
         .collect();
-    let group_parts = groups::group_parts(
-        &m,
-        &patches,
-        &keys,
-        groups::UNITS_PER_GROUP,
-        groups::GROUP_LEVELS,
-    );
+    let group_parts = match with_groups {
+        true => groups::group_parts(
+            &m,
+            &patches,
+            &keys,
+            groups::UNITS_PER_GROUP,
+            groups::GROUP_LEVELS,
+        ),
+        false => Vec::new(),
+    };
     let labels = PatchLabels {
         part_names: std::mem::take(&mut m.part_names),
         groups,

@@ -134,7 +134,10 @@ pub fn run(args: &ExportArgs) -> Result<(), CliError> {
     let format = Format::of(&args.output)?;
     let tolerance = args.tolerance()?;
     let file = super::shown(&args.files);
-    let loaded = super::load_all(&args.files, &args.cache.options(Hierarchies::Build))?;
+    // Export draws a mesh's coarse patch groups where they pay: build them too.
+    let mut options = args.cache.options(Hierarchies::Build);
+    options.groups = true;
+    let loaded = super::load_all(&args.files, &options)?;
     let scene = args.parts.apply(loaded.scene, &file)?;
     let (up, scale, unit) = frame(args, format, &scene)?;
     let opts = ExportOptions {
