@@ -353,6 +353,7 @@ mod tests {
                 center: DVec3::ZERO,
                 radius: 2.0,
             },
+            loop_starts: Vec::new(),
         }
     }
 
