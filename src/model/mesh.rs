@@ -204,6 +204,15 @@ pub(crate) fn edge(a: u32, b: u32) -> (u32, u32) {
     (a.min(b), a.max(b))
 }
 
+/// The mesh's own vertex normals (a welded mesh has the file's or creased ones, see
+/// [`TriMesh::weld`]), else smooth ones ([`vertex_normals`]).
+pub(crate) fn normals_or_smooth(mesh: &TriMesh) -> std::borrow::Cow<'_, [Vec3]> {
+    match mesh.normals.len() == mesh.positions.len() {
+        true => std::borrow::Cow::Borrowed(&mesh.normals),
+        false => std::borrow::Cow::Owned(vertex_normals(mesh)),
+    }
+}
+
 /// Area-weighted vertex normals of `mesh` (zero for unused vertices).
 pub(crate) fn vertex_normals(mesh: &TriMesh) -> Vec<Vec3> {
     let mut normals = vec![Vec3::ZERO; mesh.positions.len()];

@@ -10,7 +10,7 @@
 //! Reproducible: units are visited in index order and neighbours in index order. Not done:
 //! grouping disconnected pieces (units only join across a shared edge).
 
-use crate::model::mesh::{MeshPatch, TriMesh, edge, edge_uses, extract, vertex_normals};
+use crate::model::mesh::{MeshPatch, TriMesh, edge, edge_uses, extract, normals_or_smooth};
 use crate::mt::group::Unit;
 use crate::util::IntMap;
 
@@ -66,13 +66,7 @@ pub(crate) fn group_parts(
         }
     }
     drop(first);
-    let computed;
-    let normals = if mesh.normals.len() == mesh.positions.len() {
-        &mesh.normals
-    } else {
-        computed = vertex_normals(mesh);
-        &computed
-    };
+    let normals = normals_or_smooth(mesh);
     let uses = edge_uses(&mesh.triangles);
 
     let mut units: Vec<Unit> = (0..patches.len() as u32).map(Unit::Patch).collect();
@@ -102,7 +96,7 @@ pub(crate) fn group_parts(
                     .collect();
                 tris.sort_unstable();
                 out.push(GroupPart {
-                    patch: extract(mesh, normals, &tris, &uses),
+                    patch: extract(mesh, &normals, &tris, &uses),
                     members: members.iter().map(|&u| units[u]).collect(),
                     level,
                 });

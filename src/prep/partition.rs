@@ -4,7 +4,7 @@
 
 use std::collections::HashMap;
 
-use crate::model::mesh::{MeshPatch, TriMesh, edge, edge_uses, extract, vertex_normals};
+use crate::model::mesh::{MeshPatch, TriMesh, edge, edge_uses, extract, normals_or_smooth};
 
 /// For every triangle, the triangles sharing each of its edges (non-manifold edges: all of
 /// them; boundary edges: none), sorted, as compressed rows: triangle `t`'s neighbours are
@@ -171,16 +171,10 @@ pub fn partition(mesh: &TriMesh, target: usize) -> Vec<MeshPatch> {
         members[k].push(t as u32);
     }
     // A welded mesh has its normals (the file's or creased); a bare one smooth normals.
-    let computed;
-    let normals = if mesh.normals.len() == mesh.positions.len() {
-        &mesh.normals
-    } else {
-        computed = vertex_normals(mesh);
-        &computed
-    };
+    let normals = normals_or_smooth(mesh);
     let uses = edge_uses(&mesh.triangles);
     members
         .iter()
-        .map(|m| extract(mesh, normals, m, &uses))
+        .map(|m| extract(mesh, &normals, m, &uses))
         .collect()
 }

@@ -301,16 +301,11 @@ mod tests {
         )));
         TrimmedFace {
             id: 1,
-            fast: TrimmedFace::fast_surface(&surface),
-            closed: (None, None),
-            surface,
-            loops: Vec::new(),
-            domain_left: true,
             bounds: Sphere {
                 center: DVec3::new(0.0, 0.0, 0.2),
                 radius: 0.45,
             },
-            loop_starts: Vec::new(),
+            ..face_on(surface)
         }
     }
 
