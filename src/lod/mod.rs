@@ -528,7 +528,9 @@ impl FrameLoop {
         // (`UpdateStats::ahead`): what the refined surfaces in front will uncover, or what a
         // jump's first frame showed for the first time, is then ready a frame earlier.
         let visible_jobs = todo.len();
-        order_queue(&mut hidden);
+        if still {
+            order_queue(&mut hidden);
+        }
         for &(_, i) in &hidden {
             let level = levels.level_for(self.patches[i].wanted);
             let trimmed = matches!(scene.patches[i].surface, PatchSurface::Trimmed(_));
