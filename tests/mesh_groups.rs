@@ -209,3 +209,80 @@ fn an_export_draws_every_patch_once_within_its_tolerance() {
     assert!(some_group, "no tolerance drew a group");
     assert!(mixed, "no tolerance drew groups beside patches");
 }
+
+/// The command a user runs, `patchwork export --tolerance`, draws the groups too: the same
+/// triangles as the library's export of a scene loaded with its groups, fewer than a scene of
+/// patches alone (the other commands load without groups: `LoadOptions::groups`).
+#[test]
+fn the_export_command_draws_the_groups() {
+    use patchwork::prep::{Hierarchies, LoadOptions, NoProgress, load_with_options};
+    // 20 480 triangles: 14 patches of the default 1 500, so groups of them.
+    let mesh = bumpy_sphere(5);
+    let dir = std::env::temp_dir().join(format!("patchwork-groups-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("a scratch directory");
+    let obj = dir.join("sphere.obj");
+    let mut text = String::new();
+    for v in &mesh.positions {
+        text.push_str(&format!("v {} {} {}\n", v.x, v.y, v.z));
+    }
+    for [a, b, c] in &mesh.triangles {
+        text.push_str(&format!("f {} {} {}\n", a + 1, b + 1, c + 1));
+    }
+    std::fs::write(&obj, text).expect("writes the model");
+    let count = |groups: bool| {
+        let mut options = LoadOptions::new(Hierarchies::Build, None);
+        options.groups = groups;
+        let scene = load_with_options(&obj, &options, &NoProgress)
+            .expect("loads")
+            .scene;
+        let tol = 2e-2 * scene.bbox_diagonal();
+        let options = ExportOptions {
+            tolerance: Tolerance::Absolute(tol),
+            ..ExportOptions::default()
+        };
+        let out = assemble(&scene, &options).expect("the export assembles");
+        (
+            out.meshes
+                .iter()
+                .map(|m| m.indices.len() / 3)
+                .sum::<usize>(),
+            tol,
+        )
+    };
+    let ((grouped, tol), (alone, _)) = (count(true), count(false));
+    assert!(
+        grouped < alone,
+        "the groups save nothing here: {grouped} vs {alone}"
+    );
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_patchwork"))
+        .args([
+            "export",
+            "--no-cache",
+            "--unit",
+            "model",
+            "--up",
+            "model",
+            "--tolerance",
+        ])
+        .arg(tol.to_string())
+        .arg(&obj)
+        .arg("-o")
+        .arg(dir.join("sphere.glb"))
+        .output()
+        .expect("runs patchwork");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let drawn: usize = stdout
+        .split(", ")
+        .find_map(|f| f.strip_suffix(" triangles")?.trim().parse().ok())
+        .unwrap_or_else(|| panic!("no triangle count in {stdout:?}"));
+    std::fs::remove_dir_all(&dir).ok();
+    assert_eq!(
+        drawn, grouped,
+        "the command drew {drawn} triangles; with groups {grouped}, patches alone {alone}"
+    );
+}
