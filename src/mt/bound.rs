@@ -226,7 +226,11 @@ pub(super) fn height_over(
             continue;
         }
         let mut part = Polygon::triangle(o);
-        for &(origin, inward) in &sides {
+        // A side plane with every corner on its inner side leaves the triangle as it is.
+        for (&(origin, inward), d) in sides.iter().zip(&inside) {
+            if d.iter().all(|&x| x >= 0.0) {
+                continue;
+            }
             part = part.clip(origin, inward);
             if part.len == 0 {
                 break;
