@@ -43,6 +43,7 @@ fn main() {
         .collect();
     let build = t.elapsed().as_secs_f64();
     let built_hash = fingerprint(&built);
+    let built_drawn = drawn_at(&built, &parts);
     let t = Instant::now();
     let reduced: Vec<MtHierarchy> = built
         .into_iter()
@@ -54,34 +55,14 @@ fn main() {
     let reduce = t.elapsed().as_secs_f64();
     let cpu = thread_cpu_seconds().map(|c| c - cpu0.unwrap_or(0.0));
     let nodes: usize = reduced.iter().map(|h| h.node_count()).sum();
-    // What the hierarchies are worth: triangles drawn at a few errors (fractions of the
-    // model's bounding-box diagonal).
-    let (lo, hi) = patchwork::model::bounding_box(
-        parts
-            .iter()
-            .flat_map(|p| p.positions.iter().map(|v| v.as_dvec3())),
-    )
-    .unwrap_or_default();
-    let diagonal = lo.distance(hi);
-    let mut cut = Vec::new();
-    let drawn: Vec<String> = [1e-4, 1e-3, 1e-2]
-        .iter()
-        .map(|&f| {
-            let n: usize = reduced
-                .iter()
-                .map(|h| {
-                    h.cut(f * diagonal, &mut cut);
-                    cut.len()
-                })
-                .sum();
-            format!("{n} at {f:e}")
-        })
-        .collect();
+    let drawn = drawn_at(&reduced, &parts);
     println!(
-        "hierarchy fingerprints: built {:016x}, reduced {:016x}; triangles drawn (ε/diagonal): {}",
+        "hierarchy fingerprints: built {:016x}, reduced {:016x}; triangles drawn (ε/diagonal): {} \
+         (built, unreduced: {})",
         built_hash,
         fingerprint(&reduced),
-        drawn.join(", ")
+        drawn.join(", "),
+        built_drawn.join(", ")
     );
     println!(
         "{path}: {n} triangles, {} patches, {nodes} nodes after reduction\n\
@@ -107,6 +88,32 @@ fn main() {
         both,
         n as f64 / both / 1e3
     );
+}
+
+/// What the hierarchies are worth: triangles drawn at a few errors (fractions of the model's
+/// bounding-box diagonal).
+fn drawn_at(hs: &[MtHierarchy], parts: &[MeshPatch]) -> Vec<String> {
+    let (lo, hi) = patchwork::model::bounding_box(
+        parts
+            .iter()
+            .flat_map(|p| p.positions.iter().map(|v| v.as_dvec3())),
+    )
+    .unwrap_or_default();
+    let diagonal = lo.distance(hi);
+    let mut cut = Vec::new();
+    [1e-4, 1e-3, 5e-3, 1e-2, 2e-2]
+        .iter()
+        .map(|&f| {
+            let n: usize = hs
+                .iter()
+                .map(|h| {
+                    h.cut(f * diagonal, &mut cut);
+                    cut.len()
+                })
+                .sum();
+            format!("{n} at {f:e}")
+        })
+        .collect()
 }
 
 /// A hash of the hierarchies' stored fields (as the cache writes them): equal fingerprints,

@@ -30,8 +30,9 @@ use crate::mt::{MtHierarchy, MtParts};
 /// build's quadrics start at zero (not glam's identity), border corners collapse, and the
 /// reduction merges nodes within `mt::MAX_MERGE_ERROR_RATIO`: other hierarchies. 5: node
 /// errors are certified bounds (`mt::bound`), not samples: other errors and hierarchies. 6: the
-/// patches' coarse groups' hierarchies follow the patches' (`prep::groups`).
-pub(crate) const FORMAT_VERSION: u32 = 6;
+/// patches' coarse groups' hierarchies follow the patches' (`prep::groups`). 7: fan → original
+/// bounds against the whole original patch surface (`mt::nearest`): other (tighter) errors.
+pub(crate) const FORMAT_VERSION: u32 = 7;
 
 const MAGIC: &[u8; 8] = b"PWMTCACH";
 const HEADER: usize = 8 + 4 + 16 + 8 + 16;

@@ -208,13 +208,29 @@ pub(super) fn height_over(
     let mut worst = 0.0f64;
     edges.clear();
     for (o, ids) in originals {
+        // Signed distances of the corners inside each side plane: an original wholly outside
+        // one has no part over `tri`, and an edge wholly outside one (margin included) cannot
+        // enter its interior — neither is looked at further (the edge test below would refuse
+        // nothing for it).
+        let inside: [[f64; 3]; 3] = sides.map(|(origin, inward)| o.map(|p| inward.dot(p - origin)));
         let facing = n.dot((o[1] - o[0]).cross(o[2] - o[0])) > 0.0;
         for k in 0..3 {
-            let (u, v) = (ids[k], ids[(k + 1) % 3]);
-            edges.push(((u.min(v), u.max(v)), facing, o[k], o[(k + 1) % 3]));
+            let j = (k + 1) % 3;
+            if inside.iter().any(|d| d[k] <= margin && d[j] <= margin) {
+                continue;
+            }
+            let (u, v) = (ids[k], ids[j]);
+            edges.push(((u.min(v), u.max(v)), facing, o[k], o[j]));
+        }
+        if inside.iter().any(|d| d.iter().all(|&x| x < 0.0)) {
+            continue;
         }
         let mut part = Polygon::triangle(o);
-        for &(origin, inward) in &sides {
+        // A side plane with every corner on its inner side leaves the triangle as it is.
+        for (&(origin, inward), d) in sides.iter().zip(&inside) {
+            if d.iter().all(|&x| x >= 0.0) {
+                continue;
+            }
             part = part.clip(origin, inward);
             if part.len == 0 {
                 break;

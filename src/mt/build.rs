@@ -18,6 +18,7 @@ use std::collections::BinaryHeap;
 use glam::{DMat4, DVec3, DVec4, Vec3};
 
 use super::bound::{self, Piece};
+use super::nearest::SurfaceBvh;
 use super::{MtHierarchy, NEVER};
 use crate::util::IntMap;
 
@@ -83,13 +84,6 @@ pub(super) fn samples(a: DVec3, b: DVec3, c: DVec3) -> [DVec3; 7] {
     ]
 }
 
-/// Whether every point of the sphere `(centre, radius)` is farther than `d` from `p`, with a
-/// margin (relative 1e-9) that keeps rounding from skipping a triangle at the same distance.
-fn outside(p: DVec3, (centre, radius): (DVec3, f64), d: f64) -> bool {
-    let reach = (d + radius) * (1.0 + 1e-9);
-    p.distance_squared(centre) > reach * reach
-}
-
 /// How far above the largest sampled distance (or inherited error) a certified bound may
 /// be taken as it is, relative, before the piece it bounds is split to tighten it.
 const SLACK: f64 = 0.2;
@@ -115,23 +109,36 @@ struct Builder {
     created_by: Vec<u32>,
     removed_by: Vec<u32>,
     node_error: Vec<f64>,
+    /// The original triangles in a box hierarchy: the fan → original distances.
+    surface: SurfaceBvh,
     /// Pieces of the original surface each live triangle stands for (see [`Builder::measure`]).
     covers: Vec<Vec<u32>>,
     /// Pieces of the original surface: the original triangles first, then the parts of
-    /// those split to tighten a bound, with a sphere around each and how many splits below
-    /// its original triangle it is.
+    /// those split to tighten a bound, and how many splits below its original triangle each
+    /// is.
     pieces: Vec<Piece>,
-    piece_spheres: Vec<(DVec3, f64)>,
     piece_depth: Vec<u8>,
     /// The original triangle each piece is part of.
     piece_origin: Vec<u32>,
+    /// Each piece's corners as ids of `points`: the original vertices first, then the corners
+    /// splits made (`point_ids`: by their bits, so parts sharing a corner share its id).
+    piece_points: Vec<[u32; 3]>,
+    points: Vec<DVec3>,
+    point_ids: IntMap<(u64, u64, u64), u32>,
+    /// Per point: `point_generation` when its distances to the current fan are at
+    /// `fan_dist[point_slot..]`.
+    point_mark: Vec<u32>,
+    point_slot: Vec<u32>,
+    point_generation: u32,
+    fan_dist: Vec<f64>,
+    /// Per original triangle: `origin_generation` when [`Builder::height_bound`] has listed it.
+    origin_mark: Vec<u32>,
+    origin_generation: u32,
     /// Every triangle's corners, and a sphere around it (centroid, radius): distances are
     /// measured without looking up vertices, and a sphere far from a point skips the exact
     /// distance (see [`Builder::beyond`]).
     corners: Vec<[DVec3; 3]>,
     spheres: Vec<(DVec3, f64)>,
-    /// A sphere around the pieces each triangle covers (all of them).
-    cover_spheres: Vec<(DVec3, f64)>,
     /// Live triangles around each vertex.
     around: Vec<Vec<u32>>,
     quadric: Vec<Quadric>,
@@ -151,11 +158,7 @@ struct Builder {
     scratch_removed: Vec<u32>,
     scratch_fan: Vec<u32>,
     scratch_region: Vec<u32>,
-    scratch_groups: Vec<Group>,
     scratch_assigned: Vec<(u32, u32, f64)>,
-    scratch_cands: Vec<u32>,
-    scratch_cand_groups: Vec<Group>,
-    scratch_ring: Vec<u32>,
     scratch_pieces: Vec<(u32, u32)>,
     scratch_parts: Vec<Piece>,
     scratch_fan_pieces: Vec<(Piece, u8, Option<u32>)>,
@@ -164,14 +167,6 @@ struct Builder {
     scratch_edges3: Vec<bound::Edge>,
     /// Emptied cover lists of removed triangles, reused by new ones.
     spare_covers: Vec<Vec<u32>>,
-}
-
-/// The originals a removed triangle covered, `region[start..end]`, and a sphere around them.
-#[derive(Clone, Copy, Debug)]
-struct Group {
-    start: u32,
-    end: u32,
-    sphere: (DVec3, f64),
 }
 
 impl Builder {
@@ -223,12 +218,24 @@ impl Builder {
             .collect();
         let spheres: Vec<(DVec3, f64)> = corners.iter().map(bound::sphere).collect();
         Builder {
+            surface: SurfaceBvh::new(&corners),
             pieces: corners.clone(),
-            piece_spheres: spheres.clone(),
             piece_depth: vec![0; m],
             piece_origin: (0..m as u32).collect(),
+            piece_points: triangles.to_vec(),
+            point_ids: pos
+                .iter()
+                .enumerate()
+                .map(|(i, p)| ((p.x.to_bits(), p.y.to_bits(), p.z.to_bits()), i as u32))
+                .collect(),
+            points: pos.clone(),
+            point_mark: vec![0; n],
+            point_slot: vec![0; n],
+            point_generation: 0,
+            fan_dist: Vec::new(),
+            origin_mark: vec![0; m],
+            origin_generation: 0,
             corners,
-            cover_spheres: spheres.clone(),
             spheres,
             pos,
             tris: triangles.to_vec(),
@@ -250,11 +257,7 @@ impl Builder {
             scratch_removed: Vec::new(),
             scratch_fan: Vec::new(),
             scratch_region: Vec::new(),
-            scratch_groups: Vec::new(),
             scratch_assigned: Vec::new(),
-            scratch_cands: Vec::new(),
-            scratch_cand_groups: Vec::new(),
-            scratch_ring: Vec::new(),
             scratch_pieces: Vec::new(),
             scratch_parts: Vec::new(),
             scratch_fan_pieces: Vec::new(),
@@ -472,23 +475,15 @@ impl Builder {
         self.vertex_removed_by[from as usize] = node;
         self.vertex_target[from as usize] = to;
         let mut region = std::mem::take(&mut self.scratch_region);
-        let mut groups = std::mem::take(&mut self.scratch_groups);
         region.clear();
-        groups.clear();
         let mut inherited = 0.0f64;
         for &t in &removed {
             self.removed_by[t as usize] = node;
             inherited = inherited.max(self.node_error[self.created_by[t as usize] as usize]);
-            let start = region.len() as u32;
             region.append(&mut self.covers[t as usize]);
             // The emptied list keeps its capacity for a triangle of the fan.
             let emptied = std::mem::take(&mut self.covers[t as usize]);
             self.spare_covers.push(emptied);
-            groups.push(Group {
-                start,
-                end: region.len() as u32,
-                sphere: self.cover_spheres[t as usize],
-            });
             for v in self.tris[t as usize] {
                 self.around[v as usize].retain(|&x| x != t);
             }
@@ -506,8 +501,6 @@ impl Builder {
             let corners = new.map(|i| self.pos[i as usize]);
             self.corners.push(corners);
             self.spheres.push(bound::sphere(&corners));
-            // Set when the fan's covers are known (`measure`).
-            self.cover_spheres.push(bound::sphere(&corners));
             self.created_by.push(node);
             self.removed_by.push(NEVER);
             self.covers
@@ -537,23 +530,10 @@ impl Builder {
                 }
             }
         }
-        let error = self.measure(&fan, &region, &groups, inherited);
+        let error = self.measure(&fan, &region, inherited);
         self.node_error.push(error.max(inherited));
-        for &t in &fan {
-            let centre = self.spheres[t as usize].0;
-            let radius = self.covers[t as usize]
-                .iter()
-                .map(|&o| {
-                    let (c, r) = self.piece_spheres[o as usize];
-                    c.distance(centre) + r
-                })
-                .fold(0.0, f64::max);
-            // Rounding margin: the sphere must hold every covered point.
-            self.cover_spheres[t as usize] = (centre, radius * (1.0 + 1e-12));
-        }
         self.scratch_removed = removed;
         self.scratch_region = region;
-        self.scratch_groups = groups;
         self.scratch_fan = fan;
     }
 }

@@ -33,6 +33,7 @@ mod bound;
 mod build;
 mod cut;
 pub mod group;
+mod nearest;
 mod reduce;
 
 /// Triangles per arc the hierarchies of loaded meshes are reduced to (see the Table-1 bench

@@ -5,7 +5,8 @@
 use glam::DVec3;
 
 use super::super::bound::{self, Piece};
-use super::{Builder, FAN_DEPTH, Group, PIECE_DEPTH, SLACK, outside, samples};
+use super::super::nearest::PieceBound;
+use super::{Builder, FAN_DEPTH, PIECE_DEPTH, SLACK, samples};
 use crate::geom::point_triangle_distance;
 
 impl Builder {
@@ -15,24 +16,27 @@ impl Builder {
         point_triangle_distance(p, a, b, c)
     }
 
-    /// Distance from `p` to the piece of the original surface `o`.
-    fn piece_dist(&self, p: DVec3, o: u32) -> f64 {
-        let [a, b, c] = self.pieces[o as usize];
-        point_triangle_distance(p, a, b, c)
-    }
-
-    /// Whether piece `o` is certainly farther than `d` from `p`.
-    fn piece_beyond(&self, p: DVec3, o: u32, d: f64) -> bool {
-        outside(p, self.piece_spheres[o as usize], d)
-    }
-
     /// A new piece of the original surface, `depth` splits below an original triangle.
     fn add_piece(&mut self, piece: Piece, depth: u8, origin: u32) -> u32 {
         let id = self.pieces.len() as u32;
         self.pieces.push(piece);
-        self.piece_spheres.push(bound::sphere(&piece));
+        let ids = piece.map(|p| self.point_id(p));
+        self.piece_points.push(ids);
         self.piece_depth.push(depth);
         self.piece_origin.push(origin);
+        id
+    }
+
+    /// The id of point `p` (a corner of a piece), a new one if it is not known yet.
+    fn point_id(&mut self, p: DVec3) -> u32 {
+        let key = (p.x.to_bits(), p.y.to_bits(), p.z.to_bits());
+        let next = self.points.len() as u32;
+        let id = *self.point_ids.entry(key).or_insert(next);
+        if id == next {
+            self.points.push(p);
+            self.point_mark.push(0);
+            self.point_slot.push(0);
+        }
         id
     }
 
@@ -46,12 +50,12 @@ impl Builder {
     ///   triangle is removed, so every cut holding the triangle holds the bound. A piece
     ///   whose bound is loose is split along the side of its triangle that it overhangs
     ///   (kept split, at most [`PIECE_DEPTH`] times).
-    /// - **Fan → original**, against the original surface near it (the region's pieces and
-    ///   those covered by the live triangles around the fan): a fan triangle that surface
-    ///   covers without folding is bounded by its height over it ([`Builder::height_bound`]);
-    ///   any other by the convex bound against the one nearest piece, or the corners'
-    ///   distances plus the Lipschitz term, split where loose (along the side of that piece,
-    ///   at most [`FAN_DEPTH`] times) and bounded part by part.
+    /// - **Fan → original**: a fan triangle that the original surface around it covers without
+    ///   folding is bounded by its height over it ([`Builder::height_bound`]); any other, against
+    ///   the patch's whole original surface (a box hierarchy, [`super::super::nearest`]), by the
+    ///   convex bound against the one nearest original triangle, or the corners' distances plus
+    ///   the Lipschitz term, split where loose (along the side of that triangle, at most
+    ///   [`FAN_DEPTH`] times) and bounded part by part.
     ///
     /// "Loose" means above the bound so far (at least `inherited`) and above `(1 + `[`SLACK`]`)`
     /// times `lower`: the largest distance measured from a point of the fan or of the region
@@ -59,15 +63,16 @@ impl Builder {
     /// measure), which no bound of this collapse can be below. Slack over `inherited` would
     /// compound up the DAG. What is returned is never below the true distance, and above
     /// `max(inherited, (1 + SLACK) · lower)` only where a depth limit stopped.
-    pub(super) fn measure(
-        &mut self,
-        fan: &[u32],
-        region: &[u32],
-        groups: &[Group],
-        inherited: f64,
-    ) -> f64 {
+    pub(super) fn measure(&mut self, fan: &[u32], region: &[u32], inherited: f64) -> f64 {
         let mut assigned = std::mem::take(&mut self.scratch_assigned);
         assigned.clear();
+        // A new collapse: no corner's distances to this fan are known yet.
+        self.point_generation = self.point_generation.wrapping_add(1);
+        if self.point_generation == 0 {
+            self.point_mark.fill(0);
+            self.point_generation = 1;
+        }
+        self.fan_dist.clear();
         let mut lower = 0.0f64;
         for &o in region {
             let (at, bound, near) = self.nearest_fan_triangle(fan, o);
@@ -75,34 +80,7 @@ impl Builder {
             self.covers[at as usize].push(o);
             assigned.push((o, at, bound));
         }
-        // The pieces covered by the live triangles around the fan: original surface near the
-        // fan, as true a target for the fan → original distance as the region's own.
-        let mut cands = std::mem::take(&mut self.scratch_cands);
-        let mut cand_groups = std::mem::take(&mut self.scratch_cand_groups);
-        cands.clear();
-        cands.extend_from_slice(region);
-        cand_groups.clear();
-        cand_groups.extend_from_slice(groups);
-        let mut ring = std::mem::take(&mut self.scratch_ring);
-        ring.clear();
-        let first_fan = fan.first().copied().unwrap_or(u32::MAX);
-        for &t in fan {
-            for v in self.tris[t as usize] {
-                ring.extend(self.around[v as usize].iter().filter(|&&r| r < first_fan));
-            }
-        }
-        ring.sort_unstable();
-        ring.dedup();
-        for &r in &ring {
-            let start = cands.len() as u32;
-            cands.extend_from_slice(&self.covers[r as usize]);
-            cand_groups.push(Group {
-                start,
-                end: cands.len() as u32,
-                sphere: self.cover_spheres[r as usize],
-            });
-        }
-        lower = self.sample_lower(fan, &cands, &cand_groups, lower);
+        lower = self.sample_lower(fan, lower);
         // `lower`: distances measured at points (no bound of this collapse is below them);
         // `worst`: the bound so far. A bound within `limit` is taken as it is; slack is allowed
         // over the collapse's own distances only, not over the inherited error (it would
@@ -157,11 +135,12 @@ impl Builder {
             todo.push((
                 self.corners[t as usize],
                 0u8,
-                self.covers[t as usize].first().copied(),
+                self.covers[t as usize]
+                    .first()
+                    .map(|&o| self.piece_origin[o as usize]),
             ));
             while let Some((piece, depth, hint)) = todo.pop() {
-                let (bound, nearest, near) =
-                    self.bound_piece(&piece, &cands, &cand_groups, worst, hint);
+                let (bound, nearest, near) = self.bound_piece(&piece, worst, hint);
                 lower = lower.max(near);
                 worst = worst.max(near);
                 if bound <= worst {
@@ -180,9 +159,6 @@ impl Builder {
         self.scratch_fan_pieces = todo;
         self.scratch_parts = parts;
         self.scratch_pieces = stack;
-        self.scratch_ring = ring;
-        self.scratch_cands = cands;
-        self.scratch_cand_groups = cand_groups;
         self.scratch_assigned = assigned;
         worst
     }
@@ -193,26 +169,34 @@ impl Builder {
     fn height_bound(&mut self, t: u32) -> Option<f64> {
         let mut near = std::mem::take(&mut self.scratch_near);
         near.clear();
+        // Each original once: marked with a fresh generation as it is listed.
+        self.origin_generation = self.origin_generation.wrapping_add(1);
+        if self.origin_generation == 0 {
+            self.origin_mark.fill(0);
+            self.origin_generation = 1;
+        }
+        let g = self.origin_generation;
         let tri = self.tris[t as usize];
-        near.extend(
-            self.covers[t as usize]
-                .iter()
-                .map(|&o| self.piece_origin[o as usize]),
-        );
+        let take = |x: u32, near: &mut Vec<u32>, mark: &mut Vec<u32>| {
+            for &o in &self.covers[x as usize] {
+                let origin = self.piece_origin[o as usize];
+                if mark[origin as usize] != g {
+                    mark[origin as usize] = g;
+                    near.push(origin);
+                }
+            }
+        };
+        let mut mark = std::mem::take(&mut self.origin_mark);
+        take(t, &mut near, &mut mark);
         for k in 0..3 {
             let (u, v) = (tri[k], tri[(k + 1) % 3]);
             for &x in &self.around[u as usize] {
                 if x != t && self.tris[x as usize].contains(&v) {
-                    near.extend(
-                        self.covers[x as usize]
-                            .iter()
-                            .map(|&o| self.piece_origin[o as usize]),
-                    );
+                    take(x, &mut near, &mut mark);
                 }
             }
         }
-        near.sort_unstable();
-        near.dedup();
+        self.origin_mark = mark;
         let mut originals = std::mem::take(&mut self.scratch_originals);
         originals.clear();
         originals.extend(
@@ -230,20 +214,18 @@ impl Builder {
     /// The fan triangle whose farthest point from piece `o` is nearest, that distance (exact,
     /// convexity), and the largest over the piece's corners of their distance to the nearest
     /// fan triangle (a true distance to the fan: a lower bound of what the piece needs).
-    fn nearest_fan_triangle(&self, fan: &[u32], o: u32) -> (u32, f64, f64) {
-        let piece = self.pieces[o as usize];
+    ///
+    /// Pieces share corners (an original vertex is a corner of about six), so each corner's
+    /// distances to the fan are measured once per collapse ([`Builder::fan_distances`]); ties
+    /// go to the first fan triangle.
+    fn nearest_fan_triangle(&mut self, fan: &[u32], o: u32) -> (u32, f64, f64) {
+        let rows = self.piece_points[o as usize].map(|id| self.fan_distances(fan, id));
         let mut corner_best = [f64::INFINITY; 3];
         let mut best = (fan[0], f64::INFINITY);
-        for &t in fan {
-            // A corner whose distance cannot matter (beyond its nearest so far, and the
-            // triangle already farther than the best) is not measured.
-            let sphere = self.spheres[t as usize];
+        for (i, &t) in fan.iter().enumerate() {
             let mut far = 0.0f64;
-            for (k, &p) in piece.iter().enumerate() {
-                if far > best.1 && outside(p, sphere, corner_best[k]) {
-                    continue;
-                }
-                let d = self.dist(p, t);
+            for k in 0..3 {
+                let d = self.fan_dist[rows[k] + i];
                 corner_best[k] = corner_best[k].min(d);
                 far = far.max(d);
             }
@@ -255,81 +237,46 @@ impl Builder {
         (best.0, best.1, near)
     }
 
-    /// A certified bound of the distance from every point of `piece` to the pieces `cands`
-    /// (grouped by `groups`), or a value no above `worst` once the piece is known to be within
-    /// it; and the piece whose convex bound is the nearest (what to split along).
-    fn bound_piece(
-        &self,
-        piece: &Piece,
-        cands: &[u32],
-        groups: &[Group],
-        worst: f64,
-        hint: Option<u32>,
-    ) -> (f64, Option<u32>, f64) {
-        let mut corner_best = [f64::INFINITY; 3];
-        let mut convex = (f64::INFINITY, None);
-        // The hint first: a part of a piece split along `hint` often lies over it.
-        if let Some(o) = hint {
-            let mut far = 0.0f64;
-            for (k, &p) in piece.iter().enumerate() {
-                let d = self.piece_dist(p, o);
-                corner_best[k] = corner_best[k].min(d);
-                far = far.max(d);
-            }
-            convex = (far, Some(o));
-            if far <= worst {
-                return (far, convex.1, 0.0);
+    /// Where the distances from point `id` to the triangles of `fan` (in its order) start in
+    /// `fan_dist`, measured the first time the collapse asks (`point_generation`).
+    fn fan_distances(&mut self, fan: &[u32], id: u32) -> usize {
+        let i = id as usize;
+        if self.point_mark[i] != self.point_generation {
+            self.point_mark[i] = self.point_generation;
+            self.point_slot[i] = self.fan_dist.len() as u32;
+            let p = self.points[i];
+            for &t in fan {
+                let d = self.dist(p, t);
+                self.fan_dist.push(d);
             }
         }
-        for g in groups {
-            if piece
-                .iter()
-                .zip(&corner_best)
-                .all(|(&p, &b)| outside(p, g.sphere, b))
-                && piece.iter().any(|&p| outside(p, g.sphere, convex.0))
-            {
-                continue;
-            }
-            for &o in &cands[g.start as usize..g.end as usize] {
-                // Skipped when it can lower no corner's distance and not the convex bound.
-                if piece
-                    .iter()
-                    .zip(&corner_best)
-                    .all(|(&p, &b)| self.piece_beyond(p, o, b))
-                    && piece.iter().any(|&p| self.piece_beyond(p, o, convex.0))
-                {
-                    continue;
-                }
-                let mut far = 0.0f64;
-                for (k, &p) in piece.iter().enumerate() {
-                    let d = self.piece_dist(p, o);
-                    corner_best[k] = corner_best[k].min(d);
-                    far = far.max(d);
-                }
-                if far < convex.0 {
-                    convex = (far, Some(o));
-                    if far <= worst {
-                        return (far, convex.1, 0.0);
-                    }
-                }
+        self.point_slot[i] as usize
+    }
+
+    /// A certified bound of the distance from every point of `piece` to the original surface
+    /// ([`SurfaceBvh::piece_bound`]), or a value no above `worst` once the piece is known to be
+    /// within it; the original triangle whose convex bound is the nearest (what to split
+    /// along); and the largest true distance from a corner to the surface (0 when within).
+    /// `hint`: an original triangle measured first.
+    fn bound_piece(&self, piece: &Piece, worst: f64, hint: Option<u32>) -> (f64, Option<u32>, f64) {
+        match self.surface.piece_bound(piece, worst, hint) {
+            PieceBound::Within { far, at } => (far, Some(at), 0.0),
+            PieceBound::Full {
+                corners,
+                convex,
+                at,
+            } => {
+                let near = corners.into_iter().fold(0.0, f64::max);
+                let lipschitz = near + bound::covering_radius(piece);
+                (convex.min(lipschitz), at, near)
             }
         }
-        // Every piece that could be nearer to a corner was measured: true distances.
-        let near = corner_best.into_iter().fold(0.0, f64::max);
-        let lipschitz = near + bound::covering_radius(piece);
-        (convex.0.min(lipschitz), convex.1, near)
     }
 
     /// Sampled lower bound of the fan → original distance: the largest of `worst` and the
-    /// true distance from every sample of the fan ([`samples`]) to the pieces `cands`
-    /// (grouped by `groups`). It tells [`Builder::measure`] which certified bounds are loose.
-    fn sample_lower(
-        &mut self,
-        fan: &[u32],
-        cands: &[u32],
-        groups: &[Group],
-        mut worst: f64,
-    ) -> f64 {
+    /// true distance from every sample of the fan ([`samples`]) to the original surface. It
+    /// tells [`Builder::measure`] which certified bounds are loose.
+    fn sample_lower(&mut self, fan: &[u32], mut worst: f64) -> f64 {
         // Corners and edges the fan triangles share are sampled once.
         let g = self.next_generation();
         let mut edges = std::mem::take(&mut self.fan_edges);
@@ -347,33 +294,10 @@ impl Builder {
                     edges.push(e);
                 }
             }
-            let own = &self.covers[t as usize];
             for (s, _) in samples(a, b, c).into_iter().zip(todo).filter(|x| x.1) {
-                // Its own pieces first, then the groups, a group skipped whole when its sphere
-                // is beyond the nearest so far. The outcome, max(worst, nearest) — unchanged
-                // once a piece within `worst` is found — does not depend on the order.
-                let mut best = f64::INFINITY;
-                let scan = |list: &[u32], best: &mut f64| {
-                    for &o in list {
-                        if self.piece_beyond(s, o, *best) {
-                            continue;
-                        }
-                        *best = best.min(self.piece_dist(s, o));
-                        if *best <= worst {
-                            return true;
-                        }
-                    }
-                    false
-                };
-                if !scan(own, &mut best) {
-                    for g in groups {
-                        if !outside(s, g.sphere, best)
-                            && scan(&cands[g.start as usize..g.end as usize], &mut best)
-                        {
-                            break;
-                        }
-                    }
-                }
+                // The outcome, max(worst, nearest), is unchanged once a triangle within
+                // `worst` is found: the search stops there.
+                let best = self.surface.nearest(s, worst);
                 if best.is_finite() {
                     worst = worst.max(best);
                 }
