@@ -272,8 +272,8 @@ fn occt(root: &Path, file: &Path, tols: &[f64], diag: f64) -> Result<Vec<OcctRun
 fn field<'a>(line: &'a str, key: &str) -> Option<&'a str> {
     let pat = format!("\"{key}\": ");
     let rest = &line[line.find(&pat)? + pat.len()..];
-    let end = if rest.starts_with('"') {
-        rest[1..].find('"')? + 2
+    let end = if let Some(quoted) = rest.strip_prefix('"') {
+        quoted.find('"')? + 2
     } else {
         rest.find([',', '}']).unwrap_or(rest.len())
     };

@@ -15,7 +15,10 @@ const NEED_MARGIN: f64 = 1.01;
 /// of 2), else 2 (so that an arc whose quarter points happen to lie near its chord is still
 /// measured) — and each one's deviation `d` measured. A chord's deviation from a smooth curve
 /// grows with the square of its length, so that segment needs about √(d / tol) pieces: the
-/// polyline gets ⌈Σ √(d / tol)⌉ pieces (at least 8 for a closed edge, 1 otherwise), spread in
+/// polyline gets ⌈Σ √(d / tol)⌉ pieces (at least `n0`: one chord across a half circle of
+/// radius below ε — its diameter — is within ε in 3D, but its parameter midpoint is the
+/// axis, equally near both halves of the cylinder, and `check::fidelity` then judged
+/// kicad-demo-tinytapeout's face #57784 2.3 ε off while OCCT measured 0.7 ε), spread in
 /// proportion to each segment's √d. A circle gets the count its sagitta asks for (26 where
 /// bisection from 8 doubled to 32; on the KiCad boards the borders were most of the triangles,
 /// `benches/occt_faces.rs`). Every piece is then checked at its 3 samples and halved while it
@@ -45,7 +48,7 @@ pub(super) fn polyline_params(e: &crate::model::trimmed::TrimEdge, tol: f64) -> 
     // A circle's sagitta grows a little slower than h² (1 − cos): counted from eighths, its
     // need comes out 0.6 % short, and every piece would then be halved.
     let pieces = ((NEED_MARGIN * need.iter().sum::<f64>()).ceil() as usize)
-        .max(if closed { n0 } else { 1 })
+        .max(n0)
         .min(MAX_EDGE_SEGMENTS);
     // The pieces' ends: equal steps of the cumulative need, linear inside each initial
     // segment (a little need everywhere, so straight stretches of a curve still get spread).
