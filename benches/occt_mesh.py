@@ -2,6 +2,7 @@
 """Open CASCADE BRepMesh baseline for `benches/step_compare.rs`.
 
 Usage: occt_mesh.py FILE TOL_ABS [TOL_ABS ...] [--units file|mm|auto] [--match-diag D] [--rel]
+                   [--by-kind]
 
 Reads FILE with STEPControl_Reader (TransferRoots, OneShape), then for every absolute tolerance
 meshes the whole shape with `BRepMesh_IncrementalMesh(shape, tol, False, 0.5, False)` (linear
@@ -36,6 +37,18 @@ used (1.0 otherwise). This measures the distance from the mesh to the untrimmed 
 bound of the two-sided distance to the trimmed face, and exact for the interior of each triangle
 only at the sampled points.
 
+With `--by-kind` (for `benches/occt_faces.rs`), after each tolerance's row one line per surface
+kind follows, counting every face once however often the assembly places it (faces are told
+apart by their `TShape`, located at the identity and oriented forward: BRepMesh stores one
+triangulation per `TShape`, so instanced faces are meshed once, as ours are):
+
+    {"tool": "occt-kind", "file": ..., "tol": ..., "kind": ..., "faces": ..., "faces_meshed": ...,
+     "triangles": ...}
+
+`kind` is the `GeomAdaptor_Surface` type of `BRep_Tool.Surface_s` in our names: plane, cylinder,
+cone, sphere, torus, bspline (B-spline and Bézier, rational or not), swept (revolution and
+extrusion), offset, other. The measuring pass (and its time) is skipped with `--by-kind`.
+
 With `--rel` the tolerances are fractions of OCCT's own bounding-box diagonal instead (the
 "tol" field of the output is then the absolute tolerance used, "tol_rel" the fraction).
 
@@ -55,14 +68,25 @@ from OCP.BRepMesh import BRepMesh_IncrementalMesh
 from OCP.BRepTools import BRepTools
 from OCP.Bnd import Bnd_Box
 from OCP.Extrema import Extrema_ExtAlgo_Tree, Extrema_ExtFlag_MIN, Extrema_GenLocateExtPS
-from OCP.GeomAbs import GeomAbs_Cylinder, GeomAbs_Plane, GeomAbs_Sphere
+from OCP.GeomAbs import (
+    GeomAbs_BezierSurface,
+    GeomAbs_BSplineSurface,
+    GeomAbs_Cone,
+    GeomAbs_Cylinder,
+    GeomAbs_OffsetSurface,
+    GeomAbs_Plane,
+    GeomAbs_Sphere,
+    GeomAbs_SurfaceOfExtrusion,
+    GeomAbs_SurfaceOfRevolution,
+    GeomAbs_Torus,
+)
 from OCP.GeomAdaptor import GeomAdaptor_Surface
 from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
 from OCP.gp import gp_Pnt
 from OCP.IFSelect import IFSelect_RetDone
 from OCP.OCP.collections import Sequence_TCollection_AsciiString
 from OCP.STEPControl import STEPControl_Reader
-from OCP.TopAbs import TopAbs_FACE
+from OCP.TopAbs import TopAbs_FACE, TopAbs_FORWARD
 from OCP.TopExp import TopExp_Explorer
 from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS
@@ -267,6 +291,51 @@ def face_triangles(face):
     return nodes, uvs, triangles
 
 
+SURFACE_KINDS = {
+    GeomAbs_Plane: "plane",
+    GeomAbs_Cylinder: "cylinder",
+    GeomAbs_Cone: "cone",
+    GeomAbs_Sphere: "sphere",
+    GeomAbs_Torus: "torus",
+    GeomAbs_BezierSurface: "bspline",
+    GeomAbs_BSplineSurface: "bspline",
+    GeomAbs_SurfaceOfRevolution: "swept",
+    GeomAbs_SurfaceOfExtrusion: "swept",
+    GeomAbs_OffsetSurface: "offset",
+}
+"""`GeomAbs` surface types in the names `benches/occt_faces.rs` gives ours."""
+
+
+def unique_faces(faces):
+    """Each `TShape` once (the first occurrence), with its surface kind: [(face, kind)]."""
+    seen = {}  # hash -> the unlocated faces with it (Python's == on shapes is identity)
+    out = []
+    for face in faces:
+        key = face.Located(TopLoc_Location()).Oriented(TopAbs_FORWARD)
+        same = seen.setdefault(hash(key), [])
+        if any(key.IsSame(other) for other in same):
+            continue
+        same.append(key)
+        kind = GeomAdaptor_Surface(BRep_Tool.Surface_s(face)).GetType()
+        out.append((face, SURFACE_KINDS.get(kind, "other")))
+    return out
+
+
+def kind_rows(base, tol, unique):
+    """One `occt-kind` row per surface kind of the faces in `unique` (see the module doc)."""
+    by_kind = {}
+    for face, kind in unique:
+        ft = face_triangles(face)
+        n = 0 if ft is None else len(ft[2])
+        row = by_kind.setdefault(kind, [0, 0, 0])
+        row[0] += 1
+        row[1] += n > 0
+        row[2] += n
+    for kind, (faces, meshed, triangles) in sorted(by_kind.items()):
+        emit({**base, "tool": "occt-kind", "tol": tol, "kind": kind, "faces": faces,
+              "faces_meshed": meshed, "triangles": triangles})
+
+
 def mid(*points):
     n = len(points)
     return tuple(sum(c) / n for c in zip(*points))
@@ -307,7 +376,7 @@ def measure(faces, meshed):
     return max_error, max_face, samples, unprojected, sampled, global_calls
 
 
-def run(path, tolerances, units, match_diag, relative):
+def run(path, tolerances, units, match_diag, relative, by_kind=False):
     base = {"tool": "occt", "file": path}
     t0 = time.perf_counter()
     reader = STEPControl_Reader()
@@ -348,6 +417,7 @@ def run(path, tolerances, units, match_diag, relative):
         "mm_per_unit": mm_per_unit,
         "faces": len(faces),
     }
+    unique = unique_faces(faces) if by_kind else None
     for tol in tolerances:
         row = {**common, "tol": tol}
         if relative:
@@ -369,6 +439,11 @@ def run(path, tolerances, units, match_diag, relative):
                     meshed.append((i, *ft))
             row["triangles"] = sum(len(t) for _, _, _, t in meshed)
             row["faces_meshed"] = len(meshed)
+            if unique is not None:
+                row["unique_faces"] = len(unique)
+                emit(row)
+                kind_rows(base, tol, unique)
+                continue
             t = time.perf_counter()
             measured = measure(faces, meshed)
             max_error, max_face, samples, unprojected, sampled, global_calls = measured
@@ -411,13 +486,18 @@ def main():
         action="store_true",
         help="the tolerances are fractions of OCCT's bounding-box diagonal",
     )
+    parser.add_argument(
+        "--by-kind",
+        action="store_true",
+        help="after each row, triangles per surface kind over the unique faces (no measuring)",
+    )
     args = parser.parse_args()
     bad = [t for t in args.tolerances if not (t > 0 and math.isfinite(t))]
     if bad:
         parser.error(f"tolerances must be positive and finite: {bad}")
     if args.units == "auto" and not (args.match_diag and args.match_diag > 0):
         parser.error("--units auto needs a positive --match-diag")
-    return run(args.file, args.tolerances, args.units, args.match_diag, args.rel)
+    return run(args.file, args.tolerances, args.units, args.match_diag, args.rel, args.by_kind)
 
 
 if __name__ == "__main__":

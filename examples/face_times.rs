@@ -3,7 +3,9 @@
 //! asks; prints the slowest faces with their time, triangles and error / ε, and the slowest of
 //! all files last. `cargo run --release --example face_times -- [--rel 3e-3] [--top 5] FILE...`
 //! With `--near X,Y,Z` the faces are ordered by the distance of their mesh to that point
-//! instead (unplaced coordinates: which face drew a point a judge names).
+//! instead (unplaced coordinates: which face drew a point a judge names). `--kind K` keeps
+//! the faces whose surface is of kind K only (plane, cylinder, cone, sphere, torus, swept,
+//! bspline: the names of `benches/occt_faces.rs`).
 
 use std::collections::HashSet;
 use std::time::Instant;
@@ -11,16 +13,34 @@ use std::time::Instant;
 use patchwork::model::PatchSurface;
 use patchwork::tessellate::{PatchMesh, Tessellators};
 
+/// The face's surface kind, as `benches/occt_faces.rs` names it.
+fn kind(face: &patchwork::model::TrimmedFace) -> &'static str {
+    use truck_stepio::r#in::alias::{ElementarySurface, Surface};
+    match &face.surface {
+        Surface::ElementarySurface(e) => match e.as_ref() {
+            ElementarySurface::Plane(_) => "plane",
+            ElementarySurface::Sphere(_) => "sphere",
+            ElementarySurface::CylindricalSurface(_) => "cylinder",
+            ElementarySurface::ToroidalSurface(_) => "torus",
+            ElementarySurface::ConicalSurface(_) => "cone",
+        },
+        Surface::SweptCurve(_) => "swept",
+        Surface::BSplineSurface(_) | Surface::NurbsSurface(_) => "bspline",
+    }
+}
+
 fn main() {
     let mut rel = 3e-3;
     let mut top = 5usize;
     let mut near: Option<glam::Vec3> = None;
+    let mut only_kind: Option<String> = None;
     let mut files = Vec::new();
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         match a.as_str() {
             "--rel" => rel = args.next().and_then(|v| v.parse().ok()).unwrap_or(rel),
             "--top" => top = args.next().and_then(|v| v.parse().ok()).unwrap_or(top),
+            "--kind" => only_kind = args.next(),
             "--near" => {
                 let v: Vec<f32> = (args.next().unwrap_or_default().split(','))
                     .filter_map(|c| c.trim().parse().ok())
@@ -53,7 +73,7 @@ fn main() {
             let PatchSurface::Trimmed(f) = &p.surface else {
                 continue;
             };
-            if !seen.insert(f.id) {
+            if !seen.insert(f.id) || only_kind.as_ref().is_some_and(|k| k != kind(f)) {
                 continue;
             }
             let t0 = Instant::now();
@@ -83,7 +103,11 @@ fn main() {
         }
         let total = start.elapsed().as_secs_f64() * 1e3;
         rows.sort_by(|a, b| b.0.total_cmp(&a.0));
-        println!("{path}: {} faces, {total:.0} ms, T {tol:.4e}", rows.len());
+        let triangles: usize = rows.iter().map(|r| r.2).sum();
+        println!(
+            "{path}: {} faces, {total:.0} ms, {triangles} triangles, T {tol:.4e}",
+            rows.len()
+        );
         for (ms, id, tris, ratio, fail) in rows.iter().take(top) {
             println!(
                 "  face #{id}: {:.1} {}, {tris} triangles, error/eps {ratio:.3}{}",

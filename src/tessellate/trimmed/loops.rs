@@ -4,31 +4,76 @@
 
 use super::*;
 
+/// Margin on the pieces [`polyline_params`] predicts an edge needs.
+const NEED_MARGIN: f64 = 1.01;
+
 /// Curve parameters of an edge's polyline (from `t0` to `t1`), with chord deviation ≤ `tol`
 /// at 3 samples per segment; returns also the largest deviation sampled.
+///
+/// The edge is first cut into `n0` segments — 8 for a closed edge, 1 for a straight line (its
+/// chord is the edge: a midpoint only adds triangles, a rectangular pad's face had 6 instead
+/// of 2), else 2 (so that an arc whose quarter points happen to lie near its chord is still
+/// measured) — and each one's deviation `d` measured. A chord's deviation from a smooth curve
+/// grows with the square of its length, so that segment needs about √(d / tol) pieces: the
+/// polyline gets ⌈Σ √(d / tol)⌉ pieces (at least `n0`: one chord across a half circle of
+/// radius below ε — its diameter — is within ε in 3D, but its parameter midpoint is the
+/// axis, equally near both halves of the cylinder, and `check::fidelity` then judged
+/// kicad-demo-tinytapeout's face #57784 2.3 ε off while OCCT measured 0.7 ε), spread in
+/// proportion to each segment's √d. A circle gets the count its sagitta asks for (26 where
+/// bisection from 8 doubled to 32; on the KiCad boards the borders were most of the triangles,
+/// `benches/occt_faces.rs`). Every piece is then checked at its 3 samples and halved while it
+/// deviates more than `tol`, as before.
 pub(super) fn polyline_params(e: &crate::model::trimmed::TrimEdge, tol: f64) -> (Vec<f64>, f64) {
-    let n0 = if e.is_closed() { 8 } else { 2 };
+    let closed = e.is_closed();
+    let n0 = match (&e.curve, closed) {
+        (_, true) => 8,
+        (crate::model::trimmed::Curve3D::Line(_), false) => 1,
+        _ => 2,
+    };
+    let deviation = |a: f64, b: f64| {
+        let (pa, pb) = (e.point(a), e.point(b));
+        [0.25, 0.5, 0.75]
+            .iter()
+            .map(|f| dist_to_segment(e.point(a + (b - a) * f), pa, pb))
+            .fold(0.0, f64::max)
+    };
+    let at = |i: usize, n: usize| e.t0 + (e.t1 - e.t0) * i as f64 / n as f64;
+    // Pieces each initial segment asks for (a NaN deviation asks for none, as before).
+    let need: Vec<f64> = (0..n0)
+        .map(|i| {
+            let w = (deviation(at(i, n0), at(i + 1, n0)) / tol).sqrt();
+            if w.is_finite() { w } else { 0.0 }
+        })
+        .collect();
+    // A circle's sagitta grows a little slower than h² (1 − cos): counted from eighths, its
+    // need comes out 0.6 % short, and every piece would then be halved.
+    let pieces = ((NEED_MARGIN * need.iter().sum::<f64>()).ceil() as usize)
+        .max(n0)
+        .min(MAX_EDGE_SEGMENTS);
+    // The pieces' ends: equal steps of the cumulative need, linear inside each initial
+    // segment (a little need everywhere, so straight stretches of a curve still get spread).
+    let weight: Vec<f64> = need.iter().map(|w| w + 1e-3).collect();
+    let total: f64 = weight.iter().sum();
+    let mut ends = Vec::with_capacity(pieces + 1);
+    ends.push(e.t0);
+    let (mut seg, mut below) = (0usize, 0.0f64);
+    for k in 1..pieces {
+        let target = total * k as f64 / pieces as f64;
+        while seg + 1 < n0 && below + weight[seg] < target {
+            below += weight[seg];
+            seg += 1;
+        }
+        let f = ((target - below) / weight[seg]).clamp(0.0, 1.0);
+        ends.push(at(seg, n0) + (at(seg + 1, n0) - at(seg, n0)) * f);
+    }
+    ends.push(e.t1);
     let mut out = vec![e.t0];
     let mut worst = 0.0f64;
     // Stack of segments to examine, in reverse order so they pop in order.
-    let mut stack: Vec<(f64, f64, usize)> = (0..n0)
-        .rev()
-        .map(|i| {
-            let a = e.t0 + (e.t1 - e.t0) * i as f64 / n0 as f64;
-            let b = e.t0 + (e.t1 - e.t0) * (i + 1) as f64 / n0 as f64;
-            (a, b, 0)
-        })
-        .collect();
+    let mut stack: Vec<(f64, f64, usize)> =
+        ends.windows(2).rev().map(|w| (w[0], w[1], 0)).collect();
     while let Some((a, b, depth)) = stack.pop() {
-        let pa = e.point(a);
-        let pb = e.point(b);
-        let dev = [0.25, 0.5, 0.75]
-            .iter()
-            .map(|f| {
-                let t = a + (b - a) * f;
-                dist_to_segment(e.point(t), pa, pb)
-            })
-            .fold(0.0, f64::max);
+        let dev = deviation(a, b);
         if dev > tol && depth < 24 && out.len() + stack.len() < MAX_EDGE_SEGMENTS {
             let m = 0.5 * (a + b);
             stack.push((m, b, depth + 1));
@@ -354,7 +399,8 @@ pub(super) fn refine_border(
 /// edges share carries the first edge's parameter only (the second's first point is dropped
 /// as its repeat), so a segment from a vertex to the next edge's first sample, or from an
 /// edge's last sample to the vertex it ends at, lies on that edge too. `None` for a closing
-/// line (split on the surface). Without the vertex rule the stretch of a hyperbola from a
+/// line (split on the surface). An edge of a single chord (a straight edge) whose ends are
+/// both points of other edges is found as the edge after the one `a` ends. Without the vertex rule the stretch of a hyperbola from a
 /// wide cone's base circle to its first sample was split on the surface, a straight line in
 /// (u, v) 3 mm off the hyperbola: the face was drawn outside its trim (generated model
 /// gen-1-42, 11 T from Open CASCADE).
@@ -394,6 +440,14 @@ pub(super) fn curve_between(
         && at(last(le).0, b.p)
     {
         (le, la, ea, ta, last(le).1)
+    } else if let Some(n) = face.loops.get(la as usize).map(Vec::len)
+        && let Some(le) = edge(la, (ea + 1) % n as u32)
+        && at(first(le).0, a.p)
+        && at(last(le).0, b.p)
+    {
+        // An edge of one chord whose both points are another's: its first the previous
+        // edge's last, its last the loop's first point (a straight edge closing its loop).
+        (le, la, (ea + 1) % n as u32, first(le).1, last(le).1)
     } else {
         return None;
     };
