@@ -51,10 +51,10 @@ use std::time::{Duration, Instant};
 use rayon::prelude::*;
 
 use crate::model::{PatchSurface, Scene};
-use cache::{Free, Keep, LevelCache, PatchLod, arc_bytes};
 use crate::mt::CutState;
 use crate::tessellate::PatchMesh;
 use crate::view::View;
+use cache::{Free, Keep, LevelCache, PatchLod, arc_bytes};
 
 /// Ratio between consecutive tessellation levels.
 pub(crate) const LEVEL_RATIO: f64 = std::f64::consts::SQRT_2;

@@ -273,7 +273,10 @@ fn the_byte_budget_evicts_the_least_recently_used_level() {
     }
     // Patch 0 goes back to level 0 (used now) and caches level 1: patch 1's level 0 is now
     // the least recently used, though patch 0's level 1 was made after it.
-    assert_eq!(patches[0].switch_free(0, false, &mut keep), Some(Free::Cached));
+    assert_eq!(
+        patches[0].switch_free(0, false, &mut keep),
+        Some(Free::Cached)
+    );
     assert_eq!(recount(&patches), lru.bytes());
     let keep_bytes = |p: &PatchLod| p.cache.iter().map(|c| arc_bytes(&c.mesh)).sum::<usize>();
     // A budget whose low-water mark the other two fit under, not with patch 1's level.
@@ -380,12 +383,20 @@ fn cached_levels_stay_within_the_byte_budget_over_many_frames() {
         evicted += stats.evicted;
         from_cache += stats.from_cache;
         most = most.max(lod.cached_bytes());
-        assert!(lod.cached_bytes() <= budget, "frame {k}: {}", lod.cached_bytes());
+        assert!(
+            lod.cached_bytes() <= budget,
+            "frame {k}: {}",
+            lod.cached_bytes()
+        );
         assert_eq!(lod.cached_bytes(), recount(&lod.patches), "frame {k}");
     }
     assert!(evicted > 0, "the budget never bound");
     assert!(from_cache > 0 && most > budget / 2, "nothing stayed cached");
-    assert!(lod.patches.iter().any(|p| p.cache.iter().any(|c| c.mesh.instance.is_some())));
+    assert!(
+        lod.patches
+            .iter()
+            .any(|p| p.cache.iter().any(|c| c.mesh.instance.is_some()))
+    );
 }
 
 #[test]

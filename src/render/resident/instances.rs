@@ -346,7 +346,8 @@ impl PlacedDraws {
         if let Some(last) = records.last()
             && last.0 as usize >= self.shadow.len()
         {
-            self.shadow.resize(last.0 as usize + 1, InstanceRecord::default());
+            self.shadow
+                .resize(last.0 as usize + 1, InstanceRecord::default());
         }
         for (at, r) in &records {
             self.shadow[*at as usize] = *r;
