@@ -473,6 +473,8 @@ fn measure_in_child(
         .arg(args.fov.to_string())
         .arg("--budget-ms")
         .arg(args.budget.budget_ms.to_string())
+        .arg("--cache-mib")
+        .arg(args.budget.cache_mib.to_string())
         .arg("--work-dir")
         .arg(work_dir)
         .stdin(Stdio::null())
