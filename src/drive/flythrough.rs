@@ -7,7 +7,7 @@ use glam::DVec3;
 
 use crate::check::crack::CheckError;
 use crate::frame::{FrameState, StepOptions, step};
-use crate::lod::{InstancingStats, LodOptions, PixelErrorController};
+use crate::lod::{InstancingStats, LodMemory, LodOptions, PixelErrorController};
 use crate::model::Scene;
 use crate::render::{RenderOptions, Renderer};
 use crate::view::View;
@@ -173,6 +173,12 @@ pub struct FlythroughSummary {
     pub shared_meshes: usize,
     pub placed_patches: usize,
     pub resident_bytes: u64,
+    /// After the last frame: the frame loop's memory, its cached levels' bytes as the LRU
+    /// budget counts them ([`crate::lod::FrameLoop::cached_bytes`]) and the cached levels
+    /// evicted for that budget over the run.
+    pub lod_memory: LodMemory,
+    pub cached_bytes: usize,
+    pub evicted: u64,
 }
 
 /// Runs the fly-through; `on_frame` sees every record (progress).
@@ -217,6 +223,9 @@ pub fn run(
     let mut summary = summarize(&records, initial_ms, jump_frames(n).1);
     summary.initial_upload_ms = initial_upload_ms;
     summary.instancing = state.lod.instancing();
+    summary.lod_memory = state.lod.memory();
+    summary.cached_bytes = state.lod.cached_bytes();
+    summary.evicted = state.lod.evicted();
     if let Some(r) = state.resident() {
         summary.shared_meshes = r.shared_meshes();
         summary.placed_patches = r.placed_patches();
@@ -277,6 +286,9 @@ pub(crate) fn summarize(
         shared_meshes: 0,
         placed_patches: 0,
         resident_bytes: 0,
+        lod_memory: LodMemory::default(),
+        cached_bytes: 0,
+        evicted: 0,
     }
 }
 

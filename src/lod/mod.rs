@@ -35,11 +35,14 @@
 //! ε_c > ε_w, but too fine only once ε_c < ε_w / [`LodOptions::coarsen_factor`] (default 2):
 //! a camera moving back and forth within that band never re-tessellates. Each patch keeps its
 //! last few levels ([`LodOptions::cache_levels`]); going back to a cached level costs nothing.
+//! The cached levels of all patches together stay within [`LodOptions::cache_bytes`], least
+//! recently used evicted first (`lod::cache`).
 //!
 //! **Frame-rate target** (Pajon, after Funkhouser and Séquin's benefit/cost): see
 //! `PixelErrorController`.
 
 pub mod bvh;
+mod cache;
 mod shared;
 
 use std::sync::Arc;
@@ -51,6 +54,7 @@ use crate::model::{PatchSurface, Scene};
 use crate::mt::CutState;
 use crate::tessellate::PatchMesh;
 use crate::view::View;
+use cache::{Free, Keep, LevelCache, PatchLod, arc_bytes};
 
 /// Ratio between consecutive tessellation levels.
 pub(crate) const LEVEL_RATIO: f64 = std::f64::consts::SQRT_2;
@@ -135,6 +139,9 @@ impl Levels {
     }
 }
 
+/// Default [`LodOptions::cache_bytes`]: 256 MiB.
+pub const DEFAULT_CACHE_BYTES: usize = 256 << 20;
+
 /// Settings of the frame loop.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LodOptions {
@@ -147,6 +154,9 @@ pub struct LodOptions {
     pub coarsen_factor: f64,
     /// Tessellations kept per patch (current one included).
     pub cache_levels: usize,
+    /// Bytes of cached (not current) levels kept over all patches, least recently used
+    /// evicted first (`lod::cache`: a tessellation shared by placements counted once).
+    pub cache_bytes: usize,
     /// Placements of one surface share its tessellation per level (instanced parts).
     pub instancing: bool,
 }
@@ -158,96 +168,9 @@ impl Default for LodOptions {
             budget: Duration::from_millis(40),
             coarsen_factor: 2.0,
             cache_levels: 3,
+            cache_bytes: DEFAULT_CACHE_BYTES,
             instancing: true,
         }
-    }
-}
-
-/// Per-patch state.
-#[derive(Clone, Debug, Default)]
-struct PatchLod {
-    /// Current level and tessellation.
-    level: i32,
-    mesh: Arc<PatchMesh>,
-    /// The level the current tessellation was made at (coarser than `level` when it holds
-    /// that level too and was relabelled, module doc).
-    made: i32,
-    /// Other tessellations kept, by level.
-    cache: Vec<(i32, Arc<PatchMesh>)>,
-    /// Error the current view wants.
-    wanted: f64,
-    in_frustum: bool,
-    /// Showed in the patch-ID buffer of the last frame drawn.
-    visible: bool,
-    /// A mesh patch's last cut of its hierarchy, moved from there to the next level (Holst
-    /// §3): per-view state, kept here rather than in the scene.
-    cut: Option<CutState>,
-}
-
-impl PatchLod {
-    /// Makes `mesh` (at `level`) current, keeping the old one in the cache; evicts the cached
-    /// level farthest from the current one past `cache_levels` tessellations in all.
-    fn install(&mut self, level: i32, mesh: Arc<PatchMesh>, cache_levels: usize) {
-        let old = std::mem::replace(&mut self.mesh, mesh);
-        self.cache.push((self.level, old));
-        self.level = level;
-        self.made = level;
-        while self.cache.len() + 1 > cache_levels.max(1) {
-            let Some(k) =
-                (0..self.cache.len()).max_by_key(|&k| (self.cache[k].0 - level).unsigned_abs())
-            else {
-                break;
-            };
-            self.cache.swap_remove(k);
-        }
-    }
-}
-
-/// How a patch got a level without tessellating ([`PatchLod::switch_free`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Free {
-    /// A cached tessellation made at that level.
-    Cached,
-    /// The current tessellation, which holds that level by its measured errors.
-    Reused,
-}
-
-impl PatchLod {
-    /// Switches to `level` when that costs no tessellation: a cached tessellation made at
-    /// it, or (a trimmed face's, `trimmed`) the current one when its measured errors hold
-    /// `level` and `level` is no coarser than the one it was made at — the same triangles,
-    /// relabelled with `level`'s ε (fat borders as wide as it). `None`: it needs work.
-    fn switch_free(
-        &mut self,
-        level: i32,
-        levels: &Levels,
-        trimmed: bool,
-        cache_levels: usize,
-    ) -> Option<Free> {
-        if let Some(k) = self.cache.iter().position(|(l, _)| *l == level) {
-            let (l, mesh) = self.cache.swap_remove(k);
-            self.install(l, mesh, cache_levels);
-            return Some(Free::Cached);
-        }
-        let holds = trimmed
-            && level != self.level
-            && level <= self.made
-            && finest_held(levels, &self.mesh).is_some_and(|f| level >= f);
-        if !holds {
-            return None;
-        }
-        // A placement of a shared tessellation keeps its mesh, and its fat borders the ε it
-        // was made at (wider, so they still cover): the renderer draws the shared mesh with
-        // the shared mesh's ε, and a relabelled copy per placement would part them.
-        if self.mesh.instance.is_none() {
-            let eps = levels.eps(level).max(self.mesh.error);
-            self.mesh = Arc::new(PatchMesh {
-                eps_target: eps,
-                ..PatchMesh::clone(&self.mesh)
-            });
-        }
-        self.level = level;
-        Some(Free::Reused)
     }
 }
 
@@ -289,6 +212,8 @@ pub struct UpdateStats {
     pub tessellation: Duration,
     /// Triangles of the patches in the frustum.
     pub triangles: usize,
+    /// Cached levels evicted for [`LodOptions::cache_bytes`] (least recently used first).
+    pub evicted: usize,
 }
 
 /// Bytes a [`FrameLoop`] holds (see [`FrameLoop::memory`]).
@@ -299,7 +224,8 @@ pub struct LodMemory {
     pub state: usize,
     /// The current tessellations ([`PatchMesh::mem_bytes`] and the `Arc`'s counters).
     pub current: usize,
-    /// The cached levels other than the current one.
+    /// The cached levels other than the current one (each its own bytes; the shared
+    /// tessellations an instance points to are in `shared`).
     pub cached: usize,
     /// The shared tessellations the placements of instanced parts draw (each once, however
     /// many placements hold it; a placement itself holds no vertices).
@@ -324,10 +250,16 @@ pub struct FrameLoop {
     /// count: an animation passes a moved scene each frame, which gets its own).
     bvh: bvh::Bvh,
     bvh_for: (usize, usize),
+    /// The patches' bounding spheres as that scene has them, side by side (the cull reads
+    /// these, not the scene's patches, which are ~10× as large apart).
+    bounds: Vec<crate::model::Sphere>,
     /// The patches inside the frustum, ascending (what [`FrameLoop::meshes`] draws).
     seen: Vec<u32>,
-    /// Scratch for the next frame's `seen`.
+    /// Scratch for the next frame's `seen`, and a bit per patch to put it in order.
     seen_next: Vec<u32>,
+    seen_bits: Vec<u64>,
+    /// The order and bytes of the cached levels (`lod::cache`).
+    lru: LevelCache,
     /// Tessellations shared by the placements of one surface (instanced parts).
     shared: shared::SharedTessellations,
     /// The view of the last update (or of the first tessellation): a frame with the same one
@@ -372,15 +304,12 @@ impl FrameLoop {
             .zip(jobs)
             .zip(meshes.into_iter().zip(cuts))
             .map(|((patch, (_, level)), (mesh, cut))| PatchLod {
-                level,
-                made: level,
-                // (No deadline: every job is done.)
-                mesh: Arc::new(mesh.unwrap_or_default()),
-                cache: Vec::new(),
                 wanted: view.eps_obj(&patch.bounds, options.pixel_error),
                 in_frustum: frustum.sees(&patch.bounds),
                 visible: true,
                 cut,
+                // (No deadline: every job is done.)
+                ..PatchLod::new(level, mesh.unwrap_or_default(), &levels)
             })
             .collect();
         let seen = (0..patches.len() as u32)
@@ -391,10 +320,13 @@ impl FrameLoop {
             levels,
             patches,
             generation: 0,
+            bounds: scene.patches.iter().map(|p| p.bounds).collect(),
             bvh: bvh_of(scene),
             bvh_for: scene_key(scene),
             seen,
             seen_next: Vec::new(),
+            seen_bits: Vec::new(),
+            lru: LevelCache::default(),
             shared,
             last_view: *view,
         }
@@ -422,17 +354,21 @@ impl FrameLoop {
     /// and the shared tessellations their instances draw, each once.
     pub fn memory(&self) -> LodMemory {
         use std::mem::size_of;
-        let arc = |m: &Arc<PatchMesh>| 2 * size_of::<usize>() + m.mem_bytes();
+        let arc = |m: &Arc<PatchMesh>| arc_bytes(m);
         let mut mem = LodMemory {
-            state: self.patches.capacity() * size_of::<PatchLod>(),
+            state: self.patches.capacity() * size_of::<PatchLod>()
+                + (self.seen.capacity() + self.seen_next.capacity()) * size_of::<u32>()
+                + self.seen_bits.capacity() * size_of::<u64>()
+                + self.bounds.capacity() * size_of::<crate::model::Sphere>()
+                + self.lru.own_bytes(),
             ..LodMemory::default()
         };
         let mut shared = std::collections::HashSet::new();
         for p in &self.patches {
-            mem.state += p.cache.capacity() * size_of::<(i32, Arc<PatchMesh>)>();
+            mem.state += p.cache.capacity() * size_of::<cache::Cached>();
             mem.current += arc(&p.mesh);
-            mem.cached += p.cache.iter().map(|(_, m)| arc(m)).sum::<usize>();
-            let held = std::iter::once(&p.mesh).chain(p.cache.iter().map(|(_, m)| m));
+            mem.cached += p.cache.iter().map(|c| arc(&c.mesh)).sum::<usize>();
+            let held = std::iter::once(&p.mesh).chain(p.cache.iter().map(|c| &c.mesh));
             for inst in held.filter_map(|m| m.instance.as_ref()) {
                 if shared.insert(Arc::as_ptr(&inst.shared)) {
                     mem.shared += arc(&inst.shared);
@@ -441,6 +377,17 @@ impl FrameLoop {
         }
         mem.shared += self.shared.unused_bytes(&shared);
         mem
+    }
+
+    /// Bytes of the cached levels as [`LodOptions::cache_bytes`] bounds them: each level's
+    /// own bytes, each shared tessellation they point to once (`lod::cache`).
+    pub fn cached_bytes(&self) -> usize {
+        self.lru.bytes()
+    }
+
+    /// Cached levels evicted for [`LodOptions::cache_bytes`] since the loop started.
+    pub fn evicted(&self) -> u64 {
+        self.lru.evicted
     }
 
     /// Number of patches whose tessellation is held (current, and cached levels).
@@ -472,7 +419,8 @@ impl FrameLoop {
         self.last_view = *view;
         // Culling through the hierarchy: only the patches inside the frustum are visited.
         if scene_key(scene) != self.bvh_for {
-            self.bvh = bvh_of(scene);
+            self.bounds = scene.patches.iter().map(|p| p.bounds).collect();
+            self.bvh = bvh::Bvh::new(&self.bounds);
             self.bvh_for = scene_key(scene);
         }
         let frustum = view.frustum();
@@ -480,28 +428,28 @@ impl FrameLoop {
         let mut seen = std::mem::take(&mut self.seen_next);
         seen.clear();
         self.bvh
-            .visit_seen(|i| &scene.patches[i].bounds, &frustum, &mut seen);
-        seen.sort_unstable();
+            .visit_seen(|i| &self.bounds[i], &frustum, &mut seen);
+        ascending(&mut seen, &mut self.seen_bits, scene.patches.len());
         let frustum_changed = seen != self.seen;
         for &i in &self.seen {
             self.patches[i as usize].in_frustum = false;
         }
         for &i in &seen {
-            let (i, patch) = (i as usize, &scene.patches[i as usize]);
+            let (i, bounds) = (i as usize, &self.bounds[i as usize]);
             let p = &mut self.patches[i];
             p.in_frustum = true;
-            p.wanted = eps_of.eps(&patch.bounds);
+            p.wanted = eps_of.eps(bounds);
             stats.in_frustum += 1;
-            let current = self.levels.eps(p.level);
+            let current = p.eps;
             // (At the finest level there is nothing better to do: not queued.)
             if needs_update(current, p.wanted, opts.coarsen_factor)
                 && self.levels.level_for(p.wanted) != p.level
             {
                 if p.visible {
-                    let radius = patch.bounds.radius;
+                    let radius = bounds.radius;
                     queue.push((priority(current, p.wanted, radius, opts.pixel_error), i));
                 } else if current > p.wanted {
-                    let radius = patch.bounds.radius;
+                    let radius = bounds.radius;
                     hidden.push((priority(current, p.wanted, radius, opts.pixel_error), i));
                 }
             }
@@ -511,11 +459,16 @@ impl FrameLoop {
         order_queue(&mut queue);
         // Cached levels first, and tessellations that hold the wanted level: free.
         let levels = self.levels;
+        let mut keep = Keep {
+            levels: &levels,
+            cache_levels: opts.cache_levels,
+            lru: &mut self.lru,
+        };
         let mut todo: Vec<(usize, i32)> = Vec::with_capacity(queue.len());
         for &(_, i) in &queue {
             let level = levels.level_for(self.patches[i].wanted);
             let trimmed = matches!(scene.patches[i].surface, PatchSurface::Trimmed(_));
-            match self.patches[i].switch_free(level, &levels, trimmed, opts.cache_levels) {
+            match self.patches[i].switch_free(level, trimmed, &mut keep) {
                 Some(Free::Cached) => stats.from_cache += 1,
                 Some(Free::Reused) => stats.reused += 1,
                 None => todo.push((i, level)),
@@ -534,7 +487,7 @@ impl FrameLoop {
         for &(_, i) in &hidden {
             let level = levels.level_for(self.patches[i].wanted);
             let trimmed = matches!(scene.patches[i].surface, PatchSurface::Trimmed(_));
-            match self.patches[i].switch_free(level, &levels, trimmed, opts.cache_levels) {
+            match self.patches[i].switch_free(level, trimmed, &mut keep) {
                 Some(Free::Cached) => stats.from_cache += 1,
                 Some(Free::Reused) => stats.reused += 1,
                 None if still => todo.push((i, level)),
@@ -553,11 +506,16 @@ impl FrameLoop {
             .shared
             .tessellate(scene, &levels, &todo, &mut cuts, Some(deadline));
         stats.copied += (self.shared.saved - saved) as usize;
+        let mut keep = Keep {
+            levels: &levels,
+            cache_levels: opts.cache_levels,
+            lru: &mut self.lru,
+        };
         for (k, ((&(i, level), cut), mesh)) in todo.iter().zip(cuts).zip(results).enumerate() {
             self.patches[i].cut = cut;
             match mesh {
                 Some(mesh) => {
-                    self.patches[i].install(level, Arc::new(mesh), opts.cache_levels);
+                    self.patches[i].install(level, mesh, &mut keep);
                     stats.retessellated += 1;
                     stats.ahead += usize::from(k >= visible_jobs);
                 }
@@ -581,11 +539,16 @@ impl FrameLoop {
         stats.redone = work.redone;
         stats.redone_cpu = Duration::from_secs_f64(work.redone_secs);
         self.shared.end_frame();
+        stats.evicted = self.lru.evict(&mut self.patches, opts.cache_bytes);
         stats.tessellation = start.elapsed();
         if stats.retessellated + stats.from_cache + stats.reused > 0 || frustum_changed {
             self.generation += 1;
         }
-        stats.triangles = self.meshes().map(PatchMesh::triangle_count).sum();
+        stats.triangles = self
+            .seen
+            .iter()
+            .map(|&i| self.patches[i as usize].triangles)
+            .sum();
         stats
     }
 
@@ -593,7 +556,7 @@ impl FrameLoop {
     pub fn patch_errors_px(&self) -> Vec<f64> {
         self.patches
             .iter()
-            .map(|p| self.options.pixel_error * self.levels.eps(p.level) / p.wanted.max(1e-300))
+            .map(|p| self.options.pixel_error * p.eps / p.wanted.max(1e-300))
             .collect()
     }
 
@@ -626,7 +589,7 @@ impl FrameLoop {
             .iter()
             .map(|&i| &self.patches[i as usize])
             .filter(|p| p.visible && p.wanted > 0.0)
-            .map(|p| self.options.pixel_error * self.levels.eps(p.level) / p.wanted)
+            .map(|p| self.options.pixel_error * p.eps / p.wanted)
             .collect();
         if e.is_empty() {
             return (0.0, 0.0);
@@ -636,6 +599,25 @@ impl FrameLoop {
         let k = ((e.len() - 1) as f64 * 0.99).round() as usize;
         let (_, p99, _) = e.select_nth_unstable_by(k, f64::total_cmp);
         (max, *p99)
+    }
+}
+
+/// Puts `ids` (distinct, below `n`) in ascending order through a bit per id (`bits`,
+/// scratch): linear in `n / 64` plus the ids, where a sort of the ~30 000 patches a view of
+/// the 32 k grid sees took a fair part of a still frame's update.
+fn ascending(ids: &mut Vec<u32>, bits: &mut Vec<u64>, n: usize) {
+    bits.clear();
+    bits.resize(n.div_ceil(64), 0);
+    for &i in ids.iter() {
+        bits[i as usize >> 6] |= 1 << (i & 63);
+    }
+    ids.clear();
+    for (w, &word) in bits.iter().enumerate() {
+        let mut b = word;
+        while b != 0 {
+            ids.push(((w as u32) << 6) | b.trailing_zeros());
+            b &= b - 1;
+        }
     }
 }
 

@@ -30,12 +30,10 @@ use super::Levels;
 use crate::model::Scene;
 use crate::mt::CutState;
 use crate::tessellate::{Instance, PatchMesh, Tessellators, instance_of, placed, shared_surface};
+use crate::util::IntMap;
 
 /// Frames a shared tessellation is kept without being asked for.
 pub(crate) const KEEP_FRAMES: u64 = 16;
-
-/// Jobs from which the placements are made on the rayon workers rather than in line.
-const PARALLEL_PLACEMENTS: usize = 4096;
 
 /// Bézier patches whose translated control points differ by at most this fraction of the
 /// model's diagonal share a tessellation.
@@ -67,7 +65,7 @@ pub(super) struct SharedTessellations {
     /// Per patch: what it shares, when at least one other patch shares it.
     keys: Vec<Option<Share>>,
     /// Unplaced tessellations by surface and level, with the frame they were last asked for.
-    meshes: HashMap<(SurfaceKey, i32), (Arc<PatchMesh>, u64)>,
+    meshes: IntMap<(SurfaceKey, i32), (Arc<PatchMesh>, u64)>,
     frame: u64,
     /// Patches that got a copy instead of a tessellation of their own, since the start.
     pub(super) saved: u64,
@@ -147,7 +145,10 @@ impl SharedTessellations {
     /// the rayon workers until `deadline` ([`pull`]): shared surfaces once per level (or not
     /// at all when kept from an earlier frame), the others on their own (mesh patches moving
     /// their cut in `cuts`, one per job). Per job its mesh, or `None` when the deadline came
-    /// first (its cut is then left as it was).
+    /// first (its cut is then left as it was). A placement's mesh is an instance of its
+    /// class's tessellation made here, on the calling thread: a few hundred bytes each, where
+    /// handing thousands of them to the workers cost more than it saved on a busy machine
+    /// (the waits for both workers to be scheduled).
     pub(super) fn tessellate(
         &mut self,
         scene: &Scene,
@@ -155,30 +156,45 @@ impl SharedTessellations {
         jobs: &[(usize, i32)],
         cuts: &mut [Option<CutState>],
         deadline: Option<Instant>,
-    ) -> Vec<Option<PatchMesh>> {
+    ) -> Vec<Option<Arc<PatchMesh>>> {
         /// One piece of work: a shared surface's tessellation at a level (from its class's
         /// first patch), or job `k`'s own tessellation with its cut.
         enum Work {
             Shared((SurfaceKey, i32), usize),
             Own(usize, Mutex<Option<CutState>>),
         }
+        /// Where a job's mesh comes from: a shared tessellation kept from an earlier frame
+        /// (placed), or a piece of work.
+        enum From {
+            Kept(Arc<PatchMesh>),
+            Work(usize),
+        }
         let frame = self.frame;
         let mut work = Vec::new();
-        let mut asked = HashSet::new();
+        let mut asked: IntMap<(SurfaceKey, i32), usize> = IntMap::default();
+        let mut from = Vec::with_capacity(jobs.len());
         for (k, &(i, level)) in jobs.iter().enumerate() {
             match self.keys.get(i).copied().flatten() {
                 Some(share) => {
                     let key = (share.key, level);
                     match self.meshes.get_mut(&key) {
-                        Some(entry) => entry.1 = frame,
+                        Some(entry) => {
+                            entry.1 = frame;
+                            from.push(From::Kept(entry.0.clone()));
+                        }
                         None => {
-                            if asked.insert(key) {
+                            let w = *asked.entry(key).or_insert_with(|| {
                                 work.push(Work::Shared(key, share.source as usize));
-                            }
+                                work.len() - 1
+                            });
+                            from.push(From::Work(w));
                         }
                     }
                 }
-                None => work.push(Work::Own(k, Mutex::new(cuts[k].take()))),
+                None => {
+                    work.push(Work::Own(k, Mutex::new(cuts[k].take())));
+                    from.push(From::Work(work.len() - 1));
+                }
             }
         }
         let made = pull(work.len(), deadline, |t, w| {
@@ -200,7 +216,9 @@ impl SharedTessellations {
             }
             (mesh, started.elapsed().as_secs_f64())
         });
-        let mut out: Vec<Option<PatchMesh>> = (0..jobs.len()).map(|_| None).collect();
+        // Per piece of work its mesh: a shared tessellation (kept for the placements) or a
+        // job's own.
+        let mut results: Vec<Option<Arc<PatchMesh>>> = Vec::with_capacity(work.len());
         let mut made_shared = 0u64;
         self.last = WorkStats::default();
         for (w, made) in work.into_iter().zip(made) {
@@ -225,45 +243,47 @@ impl SharedTessellations {
                         self.last.redone_secs += secs;
                     }
                 }
-                mesh
+                Arc::new(mesh)
             });
             match w {
                 Work::Shared(key, _) => {
-                    if let Some(mesh) = mesh {
+                    if let Some(mesh) = &mesh {
                         made_shared += 1;
-                        self.meshes.insert(key, (Arc::new(mesh), frame));
+                        self.meshes.insert(key, (mesh.clone(), frame));
                     }
                 }
                 Work::Own(k, cut) => {
                     cuts[k] = cut.into_inner().unwrap_or_else(|e| e.into_inner());
-                    out[k] = mesh;
                 }
             }
+            results.push(mesh);
         }
         // The placements: an instance each of its class's tessellation, when there is one.
-        let (keys, meshes) = (&self.keys, &self.meshes);
-        let place = |(k, slot): (usize, &mut Option<PatchMesh>)| {
-            let (i, level) = jobs[k];
-            if let Some(share) = keys.get(i).copied().flatten()
-                && let Some((shared, _)) = meshes.get(&(share.key, level))
-            {
+        let mut copies = 0u64;
+        let out = from
+            .into_iter()
+            .zip(jobs)
+            .map(|(from, &(i, _))| {
+                let share = self.keys.get(i).copied().flatten();
+                let shared = match from {
+                    From::Kept(shared) => shared,
+                    From::Work(w) => {
+                        let mesh = results[w].clone()?;
+                        if share.is_none() {
+                            return Some(mesh);
+                        }
+                        mesh
+                    }
+                };
+                let share = share?;
+                copies += 1;
                 let patch = &scene.patches[i];
-                *slot = Some(match share.key {
-                    SurfaceKey::Placed(..) => placed(shared, patch),
-                    SurfaceKey::Translated(_) => translated(shared, patch, &share),
-                });
-            }
-        };
-        if jobs.len() >= PARALLEL_PLACEMENTS {
-            out.par_iter_mut().enumerate().for_each(place);
-        } else {
-            out.iter_mut().enumerate().for_each(place);
-        }
-        let copies = jobs
-            .iter()
-            .zip(&out)
-            .filter(|((i, _), m)| m.is_some() && self.keys.get(*i).copied().flatten().is_some())
-            .count() as u64;
+                Some(Arc::new(match share.key {
+                    SurfaceKey::Placed(..) => placed(&shared, patch),
+                    SurfaceKey::Translated(_) => translated(&shared, patch, &share),
+                }))
+            })
+            .collect();
         self.made += made_shared;
         self.saved += copies.saturating_sub(made_shared);
         out

@@ -282,19 +282,39 @@ pub struct BudgetArgs {
     /// Re-tessellation time budget per frame, milliseconds.
     #[arg(long, default_value_t = 40.0)]
     pub budget_ms: f64,
+    /// Memory for cached tessellation levels (those not drawn now, kept to go back to
+    /// them for free), MiB over all patches; the least recently used go first.
+    #[arg(long, default_value_t = (patchwork::lod::DEFAULT_CACHE_BYTES >> 20) as f64)]
+    pub cache_mib: f64,
+}
+
+/// Checked [`BudgetArgs`]: time per frame and bytes of cached levels.
+#[derive(Debug, Clone, Copy)]
+pub struct Budget {
+    pub time: Duration,
+    pub cache_bytes: usize,
 }
 
 impl BudgetArgs {
-    pub fn validate(&self) -> Result<Duration, CliError> {
-        positive_ms("--budget-ms", self.budget_ms)
+    pub fn validate(&self) -> Result<Budget, CliError> {
+        let time = positive_ms("--budget-ms", self.budget_ms)?;
+        if !(self.cache_mib.is_finite() && self.cache_mib >= 0.0) {
+            return Err(CliError::Negative {
+                flag: "--cache-mib",
+                value: self.cache_mib,
+            });
+        }
+        let cache_bytes = (self.cache_mib * (1u64 << 20) as f64).min(usize::MAX as f64) as usize;
+        Ok(Budget { time, cache_bytes })
     }
 }
 
 /// The frame loop's options from a checked pixel error and budget.
-pub fn lod_options(pixel_error: f64, budget: Duration) -> LodOptions {
+pub fn lod_options(pixel_error: f64, budget: Budget) -> LodOptions {
     LodOptions {
         pixel_error,
-        budget,
+        budget: budget.time,
+        cache_bytes: budget.cache_bytes,
         ..LodOptions::default()
     }
 }

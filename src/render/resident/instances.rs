@@ -14,7 +14,7 @@
 //! order, each group in patch order), form the instance-step vertex buffer; only the indices
 //! that differ from the last ones written are uploaded.
 
-use std::collections::{BTreeMap, HashMap};
+use crate::util::IntMap;
 use std::ops::{Index, IndexMut};
 
 use super::super::pipelines::Pipelines;
@@ -65,7 +65,7 @@ pub(super) struct Slots {
     pub(super) patches: Vec<Slot>,
     shared: Vec<Slot>,
     /// Shared mesh (the address of its `Arc`, which its slot holds) → key.
-    by_mesh: HashMap<usize, usize>,
+    by_mesh: IntMap<usize, usize>,
     free: Vec<usize>,
 }
 
@@ -98,6 +98,11 @@ impl Slots {
             .iter_mut()
             .enumerate()
             .chain(shared.map(|(k, s)| (k | SHARED, s)))
+    }
+
+    /// Shared slots (in use or free): keys `SHARED | k` for `k` below it.
+    fn shared_slots(&self) -> usize {
+        self.shared.len()
     }
 
     /// Shared meshes resident.
@@ -171,6 +176,14 @@ impl ResidentGeometry {
             if new {
                 build.push((k, inst.shared.clone()));
             }
+            let mut record = InstanceRecord::of(m, inst);
+            if self.fault == Fault::UnplacedInstances {
+                record.rows = [
+                    [1.0, 0.0, 0.0, 0.0],
+                    [0.0, 1.0, 0.0, 0.0],
+                    [0.0, 0.0, 1.0, 0.0],
+                ];
+            }
             let old = std::mem::replace(
                 &mut self.slots[i],
                 Slot {
@@ -181,15 +194,11 @@ impl ResidentGeometry {
                 },
             );
             self.free_ranges(&old);
-            let mut record = InstanceRecord::of(m, inst);
-            if self.fault == Fault::UnplacedInstances {
-                record.rows = [
-                    [1.0, 0.0, 0.0, 0.0],
-                    [0.0, 1.0, 0.0, 0.0],
-                    [0.0, 0.0, 1.0, 0.0],
-                ];
+            // A placement that only changed level (another shared mesh, the same record:
+            // the teapot grid's copies) writes nothing.
+            if record_at.is_none_or(|at| !self.placed.holds(at, &record)) {
+                records.push((i, record));
             }
-            records.push((i, record));
             stats.placed += 1;
         }
         for k in released {
@@ -253,6 +262,9 @@ pub(super) struct PlacedDraws {
     list: Vec<u32>,
     written: Vec<u32>,
     buffer: Option<wgpu::Buffer>,
+    /// The records as written, by index (what the GPU holds; a record written again with
+    /// the same bytes is not uploaded).
+    shadow: Vec<InstanceRecord>,
 }
 
 impl PlacedDraws {
@@ -302,6 +314,11 @@ impl PlacedDraws {
             .expect("reserve made room for every record allocated")
     }
 
+    /// Whether record `at` holds `record` already.
+    fn holds(&self, at: u64, record: &InstanceRecord) -> bool {
+        self.shadow.get(at as usize) == Some(record)
+    }
+
     fn free_record(&mut self, at: u64) {
         if let Some((pool, _)) = &mut self.records {
             pool.alloc.free_range(at);
@@ -326,6 +343,15 @@ impl PlacedDraws {
             return;
         };
         records.sort_unstable_by_key(|r| r.0);
+        if let Some(last) = records.last()
+            && last.0 as usize >= self.shadow.len()
+        {
+            self.shadow
+                .resize(last.0 as usize + 1, InstanceRecord::default());
+        }
+        for (at, r) in &records {
+            self.shadow[*at as usize] = *r;
+        }
         let mut k = 0;
         while k < records.len() {
             let start = k;
@@ -340,23 +366,33 @@ impl PlacedDraws {
 
     /// Groups the placed patches among `drawn` by shared mesh (in slot order, each group in
     /// the order of `drawn`).
+    /// (A counting sort by shared slot: two passes over `drawn`, no map.)
     pub(super) fn collect(&mut self, slots: &Slots, drawn: &[usize]) {
-        let mut groups: BTreeMap<usize, Vec<u32>> = BTreeMap::new();
-        for &i in drawn {
-            let s = &slots[i];
-            if let (Some(k), Some(at)) = (s.instance_of, s.record_at) {
-                groups.entry(k).or_default().push(at as u32);
-            }
+        let placed = |i: &usize| {
+            let s = &slots[*i];
+            Some((s.instance_of? & !SHARED, s.record_at? as u32))
+        };
+        // Per shared slot its placements' first index in the list, then where the next goes.
+        let mut next = vec![0u32; slots.shared_slots() + 1];
+        for (k, _) in drawn.iter().filter_map(placed) {
+            next[k + 1] += 1;
+        }
+        for k in 1..next.len() {
+            next[k] += next[k - 1];
+        }
+        let starts = next.clone();
+        self.list.clear();
+        self.list.resize(next[next.len() - 1] as usize, 0);
+        for (k, at) in drawn.iter().filter_map(placed) {
+            self.list[next[k] as usize] = at;
+            next[k] += 1;
         }
         self.groups.clear();
-        self.list.clear();
-        for (k, members) in groups {
-            let s = &slots[k];
-            let first = self.list.len() as u32;
-            self.list.extend_from_slice(&members);
-            if s.ranges.iter().any(Option::is_some) {
-                self.groups
-                    .push((s.arena, s.ranges, first, self.list.len() as u32 - first));
+        for k in 0..slots.shared_slots() {
+            let (first, end) = (starts[k], starts[k + 1]);
+            let s = &slots[k | SHARED];
+            if end > first && s.ranges.iter().any(Option::is_some) {
+                self.groups.push((s.arena, s.ranges, first, end - first));
             }
         }
     }

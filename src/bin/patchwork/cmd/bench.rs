@@ -213,6 +213,15 @@ pub fn run(args: &BenchArgs) -> Result<bool, CliError> {
             "placed_patches": summary.placed_patches,
         },
         "resident_bytes": summary.resident_bytes,
+        "lod_memory": {
+            "state": summary.lod_memory.state,
+            "current": summary.lod_memory.current,
+            "cached": summary.lod_memory.cached,
+            "shared": summary.lod_memory.shared,
+            "cached_budgeted": summary.cached_bytes,
+            "cache_budget": opts.lod.cache_bytes,
+            "evicted": summary.evicted,
+        },
         "crack_pixels": {
             "total": summary.total_crack_pixels,
             "max": summary.max_crack_pixels,
@@ -300,6 +309,18 @@ pub fn run(args: &BenchArgs) -> Result<bool, CliError> {
             mib(summary.resident_bytes as f64)
         );
     }
+    let m = summary.lod_memory;
+    data!(
+        "frame loop memory         {} (state {}, current {}, cached {}, shared {}); cached levels as budgeted {} of {}, {} evicted",
+        mib(m.total() as f64),
+        mib(m.state as f64),
+        mib(m.current as f64),
+        mib(m.cached as f64),
+        mib(m.shared as f64),
+        mib(summary.cached_bytes as f64),
+        mib(opts.lod.cache_bytes as f64),
+        summary.evicted
+    );
     if let (Some(max), Some(total)) = (summary.max_crack_pixels, summary.total_crack_pixels) {
         data!("crack pixels              {total} in all, at most {max} in a frame");
     }
@@ -452,6 +473,8 @@ fn measure_in_child(
         .arg(args.fov.to_string())
         .arg("--budget-ms")
         .arg(args.budget.budget_ms.to_string())
+        .arg("--cache-mib")
+        .arg(args.budget.cache_mib.to_string())
         .arg("--work-dir")
         .arg(work_dir)
         .stdin(Stdio::null())
