@@ -180,16 +180,32 @@ fn an_instanced_placement_lands_where_its_world_copy_does() {
             depth * 1000 <= covered,
             "view {v}: {depth} of {covered} pixels"
         );
-        // Every patch covers about as many pixels in both (thin or
-        // coplanar faces change a few edge pixels).
-        let count = |f: &Frame| {
+        // Every patch covers about as many pixels in both (thin faces change a few edge
+        // pixels). Pixels where two coplanar faces tie (another patch at the same depth, as
+        // in `compare`) are left out: a tie goes either way with the rounding, over a whole
+        // contact face (on llvmpipe's GL, 17 of one small face's 33 pixels went to the face
+        // it ties with when placed).
+        let (ia, ib) = (a.ids.as_ref().expect("ids"), b.ids.as_ref().expect("ids"));
+        let (da, db) = (
+            a.depth.as_ref().expect("depth"),
+            b.depth.as_ref().expect("depth"),
+        );
+        let tie = |k: usize| {
+            ia[k] != ib[k]
+                && ia[k] != 0
+                && ib[k] != 0
+                && (da[k] - db[k]).abs() <= 1e-4 * da[k].abs()
+        };
+        let count = |ids: &[u32]| {
             let mut c = vec![0usize; scene.patches.len() + 1];
-            for &i in f.ids.as_ref().expect("ids") {
-                c[i as usize] += 1;
+            for (k, &i) in ids.iter().enumerate() {
+                if !tie(k) {
+                    c[i as usize] += 1;
+                }
             }
             c
         };
-        let (ca, cb) = (count(&a), count(&b));
+        let (ca, cb) = (count(ia), count(ib));
         for p in 1..ca.len() {
             let d = ca[p].abs_diff(cb[p]);
             assert!(
