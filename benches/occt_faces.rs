@@ -28,9 +28,8 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
 
-use patchwork::model::{PatchSurface, TrimmedFace};
+use patchwork::model::PatchSurface;
 use patchwork::tessellate::{PatchMesh, Tessellators};
-use truck_stepio::r#in::alias::{ElementarySurface, Surface};
 
 /// Tolerances, as fractions of our bounding-box diagonal.
 const REL_TOLERANCES: [f64; 3] = [1e-2, 3e-3, 1e-3];
@@ -92,21 +91,6 @@ fn label(path: &Path) -> String {
     )
 }
 
-/// Our name for a face's surface kind (the names `occt_mesh.py --by-kind` maps OCCT's to).
-fn kind(face: &TrimmedFace) -> &'static str {
-    match &face.surface {
-        Surface::ElementarySurface(e) => match e.as_ref() {
-            ElementarySurface::Plane(_) => "plane",
-            ElementarySurface::Sphere(_) => "sphere",
-            ElementarySurface::CylindricalSurface(_) => "cylinder",
-            ElementarySurface::ToroidalSurface(_) => "torus",
-            ElementarySurface::ConicalSurface(_) => "cone",
-        },
-        Surface::SweptCurve(_) => "swept",
-        Surface::BSplineSurface(_) | Surface::NurbsSurface(_) => "bspline",
-    }
-}
-
 /// OCCT reads files itself: a `.gz` is decompressed into `target/occt_faces/` once.
 fn plain_file(root: &Path, path: &Path) -> Result<PathBuf, String> {
     if path.extension().is_none_or(|e| e != "gz") {
@@ -157,7 +141,7 @@ fn compare(root: &Path, path: &Path, md: &mut String) -> Result<(), String> {
                 t.unplaced(p, tol, &mut mesh);
                 ms = ms.min(t0.elapsed().as_secs_f64() * 1e3);
             }
-            let k = ours.entry(kind(f)).or_default();
+            let k = ours.entry(f.kind()).or_default();
             k.faces += 1;
             k.triangles += mesh.triangles.len();
             k.ms += ms;

@@ -13,22 +13,6 @@ use std::time::Instant;
 use patchwork::model::PatchSurface;
 use patchwork::tessellate::{PatchMesh, Tessellators};
 
-/// The face's surface kind, as `benches/occt_faces.rs` names it.
-fn kind(face: &patchwork::model::TrimmedFace) -> &'static str {
-    use truck_stepio::r#in::alias::{ElementarySurface, Surface};
-    match &face.surface {
-        Surface::ElementarySurface(e) => match e.as_ref() {
-            ElementarySurface::Plane(_) => "plane",
-            ElementarySurface::Sphere(_) => "sphere",
-            ElementarySurface::CylindricalSurface(_) => "cylinder",
-            ElementarySurface::ToroidalSurface(_) => "torus",
-            ElementarySurface::ConicalSurface(_) => "cone",
-        },
-        Surface::SweptCurve(_) => "swept",
-        Surface::BSplineSurface(_) | Surface::NurbsSurface(_) => "bspline",
-    }
-}
-
 fn main() {
     let mut rel = 3e-3;
     let mut top = 5usize;
@@ -73,7 +57,7 @@ fn main() {
             let PatchSurface::Trimmed(f) = &p.surface else {
                 continue;
             };
-            if !seen.insert(f.id) || only_kind.as_ref().is_some_and(|k| k != kind(f)) {
+            if !seen.insert(f.id) || only_kind.as_ref().is_some_and(|k| k != f.kind()) {
                 continue;
             }
             let t0 = Instant::now();

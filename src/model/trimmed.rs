@@ -310,6 +310,24 @@ pub struct TrimmedFace {
 }
 
 impl TrimmedFace {
+    /// The surface's kind, as the OCCT comparison names it (`benches/occt_faces.rs`,
+    /// `benches/occt_mesh.py --by-kind`): plane, sphere, cylinder, torus, cone, swept or
+    /// bspline.
+    pub fn kind(&self) -> &'static str {
+        use truck_stepio::r#in::alias::ElementarySurface as E;
+        match &self.surface {
+            TruckSurface::ElementarySurface(e) => match e.as_ref() {
+                E::Plane(_) => "plane",
+                E::Sphere(_) => "sphere",
+                E::CylindricalSurface(_) => "cylinder",
+                E::ToroidalSurface(_) => "torus",
+                E::ConicalSurface(_) => "cone",
+            },
+            TruckSurface::SweptCurve(_) => "swept",
+            TruckSurface::BSplineSurface(_) | TruckSurface::NurbsSurface(_) => "bspline",
+        }
+    }
+
     /// Our evaluation of `surface` when it is a B-spline or an analytic surface we take (see
     /// [`TrimmedFace::fast`]).
     pub(crate) fn fast_surface(surface: &TruckSurface) -> Option<Arc<FastSurface>> {
