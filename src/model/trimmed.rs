@@ -314,17 +314,9 @@ impl TrimmedFace {
     /// `benches/occt_mesh.py --by-kind`): plane, sphere, cylinder, torus, cone, swept or
     /// bspline.
     pub fn kind(&self) -> &'static str {
-        use truck_stepio::r#in::alias::ElementarySurface as E;
-        match &self.surface {
-            TruckSurface::ElementarySurface(e) => match e.as_ref() {
-                E::Plane(_) => "plane",
-                E::Sphere(_) => "sphere",
-                E::CylindricalSurface(_) => "cylinder",
-                E::ToroidalSurface(_) => "torus",
-                E::ConicalSurface(_) => "cone",
-            },
-            TruckSurface::SweptCurve(_) => "swept",
-            TruckSurface::BSplineSurface(_) | TruckSurface::NurbsSurface(_) => "bspline",
+        match surface_kind(&self.surface) {
+            "b-spline" | "nurbs" => "bspline",
+            k => k,
         }
     }
 
