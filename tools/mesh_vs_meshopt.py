@@ -21,6 +21,15 @@ its own and the primitives concatenated, so it may simplify along them but not a
 — the constraint our patches have (a patch never crosses a part or colour). A renderer must
 keep those borders: collapsing across one moves a colour boundary. The distances are still to
 the whole welded original. Without primitives (OBJ, PLY, one primitive) the two are the same.
+
+As a judge (CI runs it on every shipped mesh): the run fails (exit 1) when our sampled
+Hausdorff distance exceeds the tolerance T asked for (every cut is certified within T, so a
+sample beyond it is a broken bound; float32 positions allow 1e-5 of T), or, with
+`--max-ratio R`, when ours / meshopt exceeds R — except for the (model, rel) pairs listed in
+`--known-failures FILE` (lines `MODEL REL  reason`; MODEL as given on the command line),
+which are reported KNOWN. `--mutate K` moves every vertex of our export by K·T in a random
+direction before it is measured: a broken simplifier the judge must catch (CI runs it and
+requires exit 1).
 """
 
 import argparse
@@ -87,7 +96,21 @@ def main():
                     help="meshoptimizer keeps the borders between the file's primitives")
     ap.add_argument("--patchwork", default=os.environ.get(
         "PATCHWORK", os.path.join(REPO, "target", "release", "patchwork")))
+    ap.add_argument("--max-ratio", type=float, default=None,
+                    help="fail when ours / meshopt exceeds this (issue 30's goal: 1.0)")
+    ap.add_argument("--known-failures", default=None,
+                    help="file of `MODEL REL  reason` lines reported KNOWN, not failed")
+    ap.add_argument("--mutate", type=float, default=0.0,
+                    help="move our vertices by this many T at random (the judge must fail)")
     args = ap.parse_args()
+    known = set()
+    if args.known_failures:
+        with open(args.known_failures) as f:
+            for line in f:
+                words = line.split()
+                if len(words) >= 2 and not words[0].startswith("#"):
+                    known.add((words[0], float(words[1])))
+    failures = []
     import meshoptimizer
 
     with tempfile.TemporaryDirectory() as tmp:
@@ -116,14 +139,38 @@ def main():
                 sys.exit(f"our export reaches {off:.3g} outside the original's box: "
                          "not the same frame")
             n = len(ours.faces)
+            if args.mutate:
+                rng = np.random.default_rng(3)
+                step = rng.normal(size=ours.vertices.shape)
+                step /= np.linalg.norm(step, axis=1, keepdims=True)
+                ours = trimesh.Trimesh(ours.vertices + step * args.mutate * rel * diag,
+                                       ours.faces, process=False)
             dst = np.zeros(indices.size, dtype=np.uint32)
             k = meshoptimizer.simplify(dst, indices, verts, target_index_count=3 * n,
                                        target_error=1.0)
             theirs = trimesh.Trimesh(given.vertices, dst[:k].reshape(-1, 3), process=False)
             h_ours, h_theirs = hausdorff(ours, orig) / diag, hausdorff(theirs, orig) / diag
-            print(f"{rel:>8g} {n:>10} {h_ours:>12.2e} {h_theirs:>15.2e} {h_ours / h_theirs:>6.1f}"
-                  f"   (meshopt {len(theirs.faces)} triangles)", flush=True)
-    return 0
+            ratio = h_ours / h_theirs
+            verdict = []
+            if h_ours > rel * (1 + 1e-5):
+                verdict.append(f"ours {h_ours:.3e} is beyond the tolerance {rel:g}: "
+                               "the certified bound is broken")
+            if args.max_ratio is not None and ratio > args.max_ratio:
+                verdict.append(f"ratio {ratio:.3f} > {args.max_ratio:g}")
+            mark = ""
+            if not verdict and (args.model, rel) in known:
+                mark = "  NOW PASSES: remove it from the known failures"
+            if verdict:
+                if (args.model, rel) in known and not any("certified" in v for v in verdict):
+                    mark = "  KNOWN: " + "; ".join(verdict)
+                else:
+                    mark = "  FAIL: " + "; ".join(verdict)
+                    failures.append(f"{args.model} at {rel:g}: " + "; ".join(verdict))
+            print(f"{rel:>8g} {n:>10} {h_ours:>12.2e} {h_theirs:>15.2e} {ratio:>6.3f}"
+                  f"   (meshopt {len(theirs.faces)} triangles){mark}", flush=True)
+    for f in failures:
+        print("FAIL", f)
+    return 1 if failures else 0
 
 
 if __name__ == "__main__":
