@@ -32,7 +32,9 @@ use crate::mt::{MtHierarchy, MtParts};
 /// errors are certified bounds (`mt::bound`), not samples: other errors and hierarchies. 6: the
 /// patches' coarse groups' hierarchies follow the patches' (`prep::groups`). 7: fan → original
 /// bounds against the whole original patch surface (`mt::nearest`): other (tighter) errors.
-pub(crate) const FORMAT_VERSION: u32 = 7;
+/// 8: collapses ordered by their expected node error (`mt::build`: lazy re-keying), not the
+/// quadric alone: other hierarchies.
+pub(crate) const FORMAT_VERSION: u32 = 8;
 
 const MAGIC: &[u8; 8] = b"PWMTCACH";
 const HEADER: usize = 8 + 4 + 16 + 8 + 16;

@@ -1,9 +1,11 @@
 //! Multi-triangulation (MT) hierarchy of one mesh patch, after Holst and Schumann's reduced
 //! MT hierarchies (the `holst-reduced-mt-hierarchy` paper, sections 2–3).
 //!
-//! The hierarchy is built by half-edge collapses ordered by quadric error (Garland–Heckbert
-//! plane quadrics, plus constraint planes along the patch border so the border keeps its
-//! shape). A half-edge collapse moves a vertex onto a neighbour, so no vertex is ever created:
+//! The hierarchy is built by half-edge collapses ordered by the error they are expected to
+//! have: Garland–Heckbert plane quadrics (plus constraint planes along the patch border so the
+//! border keeps its shape) as a distance, raised lazily to a cheap estimate of the node error
+//! (what it inherits, how far the original vertices it stands for are from its fan), so nodes
+//! come roughly in the order of their errors. A half-edge collapse moves a vertex onto a neighbour, so no vertex is ever created:
 //! the vertex buffer is the patch's own, built once. Every collapse is a **node**; every
 //! triangle records the node that created it (0: the original mesh) and the node that removed
 //! it (`NEVER`: still there at the coarsest level). Triangles sharing (creator, remover) form
