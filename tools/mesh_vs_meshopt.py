@@ -33,6 +33,8 @@ requires exit 1).
 """
 
 import argparse
+import json
+import math
 import os
 import subprocess
 import sys
@@ -83,14 +85,162 @@ def hausdorff(a, b, n=100000):
     return max(one_sided(a, b, n, 1), one_sided(b, a, n, 2))
 
 
+# The frame distances are measured in: the original's box centred at the origin, its diagonal
+# this long. trimesh's closest point on a triangle tests products of edge vectors against an
+# absolute 1e-12, so on a model of millimetre-sized triangles given in metres it answered
+# 2.8e-4 for a point on the triangle itself (mgen-1-11, its diagonal 0.05): every distance is
+# taken at this one scale, and `judge` checks the measurement on the original against itself.
+FRAME_DIAGONAL = 1000.0
+
+
+def framed(mesh, centre, scale):
+    return trimesh.Trimesh((mesh.vertices - centre) * scale, mesh.faces, process=False)
+
+
 def export(patchwork, model, out, tolerance):
-    subprocess.run([patchwork, "export", model, "-q", "--no-cache", "-o", out, "--tolerance",
-                    repr(tolerance), "--unit", "model", "--up", "model"], check=True)
+    """Our export of `model` at `tolerance` into `out`; None, or why it failed."""
+    run = subprocess.run([patchwork, "export", model, "-q", "--no-cache", "-o", out,
+                          "--tolerance", repr(tolerance), "--unit", "model", "--up", "model"],
+                         capture_output=True, text=True)
+    if run.returncode != 0:
+        return f"patchwork export exited {run.returncode}: {run.stderr.strip()[-400:]}"
+    return None
+
+
+def judge(model, rels, keep_parts, patchwork, max_ratio, known, mutate=0.0, name=None,
+          quiet=False):
+    """Judges `model` at every relative tolerance of `rels`; returns the failures (strings).
+    `name` (default: the path) is what `known` lists; `quiet` prints nothing."""
+    import meshoptimizer
+
+    name = name or model
+    say = (lambda *a, **k: None) if quiet else print
+    failures = []
+    with tempfile.TemporaryDirectory() as tmp:
+        orig = load(model)
+        # One vertex per position (a file splits vertices at UV and normal seams, which
+        # meshoptimizer would read as open borders and lock).
+        orig.merge_vertices(merge_tex=True, merge_norm=True)
+        diag = float(np.linalg.norm(orig.bounds[1] - orig.bounds[0]))
+        say(f"{name}: {len(orig.faces)} triangles, diagonal {diag:.4g}")
+        say(f"{'T/diag':>8} {'triangles':>10} {'ours H/diag':>12} {'meshopt H/diag':>15} {'ratio':>6}")
+        given = by_parts(model) if keep_parts else orig
+        if keep_parts:
+            say(f"meshoptimizer keeps the borders of the primitives: {len(given.vertices)} "
+                f"vertices against {len(orig.vertices)} welded")
+        indices = given.faces.astype(np.uint32).ravel()
+        verts = given.vertices.astype(np.float32)
+        centre, scale = (orig.bounds[0] + orig.bounds[1]) / 2, FRAME_DIAGONAL / diag
+        judged = framed(orig, centre, scale)
+        # The measurement itself: the original's own samples lie on it.
+        self_distance = one_sided(judged, judged, 10000, 5) / FRAME_DIAGONAL
+        if self_distance > 1e-9:
+            failures.append(f"{name}: the measurement is wrong: the original is {self_distance:.3g} "
+                            "of its diagonal from itself")
+            say("FAIL", failures[-1])
+            return failures
+        for rel in rels:
+            out = os.path.join(tmp, f"ours-{rel}.glb")
+            why = export(patchwork, model, out, rel * diag)
+            if why:
+                failures.append(f"{name} at {rel:g}: {why}")
+                say("FAIL", failures[-1])
+                continue
+            ours = load(out)
+            # Our vertices are the original's (half-edge collapses): outside its box, the two
+            # are not in the same frame.
+            off = float(max((orig.bounds[0] - ours.bounds[0]).max(),
+                            (ours.bounds[1] - orig.bounds[1]).max()))
+            if off > 1e-6 * diag:
+                failures.append(f"{name} at {rel:g}: our export reaches {off:.3g} outside the "
+                                "original's box: not the same frame")
+                say("FAIL", failures[-1])
+                continue
+            n = len(ours.faces)
+            if mutate:
+                rng = np.random.default_rng(3)
+                step = rng.normal(size=ours.vertices.shape)
+                step /= np.linalg.norm(step, axis=1, keepdims=True)
+                ours = trimesh.Trimesh(ours.vertices + step * mutate * rel * diag,
+                                       ours.faces, process=False)
+            dst = np.zeros(indices.size, dtype=np.uint32)
+            k = meshoptimizer.simplify(dst, indices, verts, target_index_count=3 * n,
+                                       target_error=1.0)
+            theirs = trimesh.Trimesh(given.vertices, dst[:k].reshape(-1, 3), process=False)
+            h_ours = hausdorff(framed(ours, centre, scale), judged) / FRAME_DIAGONAL
+            h_theirs = hausdorff(framed(theirs, centre, scale), judged) / FRAME_DIAGONAL
+            ratio = h_ours / h_theirs if h_theirs > 0 else (1.0 if h_ours == 0 else math.inf)
+            verdict = []
+            if h_ours > rel * (1 + 1e-5):
+                verdict.append(f"ours {h_ours:.3e} is beyond the tolerance {rel:g}: "
+                               "the certified bound is broken")
+            if max_ratio is not None and ratio > max_ratio:
+                verdict.append(f"ratio {ratio:.3f} > {max_ratio:g}")
+            mark = ""
+            if not verdict and (name, rel) in known:
+                mark = "  NOW PASSES: remove it from the known failures"
+            if verdict:
+                if (name, rel) in known and not any("certified" in v for v in verdict):
+                    mark = "  KNOWN: " + "; ".join(verdict)
+                else:
+                    mark = "  FAIL: " + "; ".join(verdict)
+                    failures.append(f"{name} at {rel:g}: " + "; ".join(verdict))
+            say(f"{rel:>8g} {n:>10} {h_ours:>12.2e} {h_theirs:>15.2e} {ratio:>6.3f}"
+                f"   (meshopt {len(theirs.faces)} triangles){mark}", flush=True)
+    return failures
+
+
+def read_known(path):
+    known = set()
+    if path:
+        with open(path) as f:
+            for line in f:
+                words = line.split()
+                if len(words) >= 2 and not words[0].startswith("#"):
+                    known.add((words[0], float(words[1])))
+    return known
+
+
+def judge_generated(args, rels, known):
+    """`--generate N`: the seeded generator's meshes (tools/mesh_generator.py) judged as above,
+    each by its name `mgen-SEED-I`; a failure is reduced (`--reduce-to DIR`) to the smallest
+    recipe that still fails the same way and written there."""
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    import mesh_generator as gen
+
+    failures = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for i in range(args.gen_start, args.gen_start + args.generate):
+            rec = gen.recipe(args.gen_seed, i)
+            name = f"mgen-{args.gen_seed}-{i}"
+            print(f"== {name}: {gen.describe(rec)}", flush=True)
+            path = gen.write(rec, os.path.join(tmp, name))
+            parts = "parts" in rec["extras"] or "materials" in rec["extras"]
+            found = judge(path, rels, parts, args.patchwork, args.max_ratio, known, name=name)
+            if found and args.reduce_to:
+                certified = any("certified" in f for f in found)
+                at = [r for r in rels if any(f" at {r:g}:" in f for f in found)]
+
+                def fails(r):
+                    p = gen.write(r, os.path.join(tmp, "reduce"))
+                    got = judge(p, at, "parts" in r["extras"] or "materials" in r["extras"],
+                                args.patchwork, args.max_ratio, set(), quiet=True)
+                    return any(("certified" in f) == certified for f in got)
+
+                small = gen.reduce_recipe(rec, fails)
+                os.makedirs(args.reduce_to, exist_ok=True)
+                stem = os.path.join(args.reduce_to, name + "-reduced")
+                kept = gen.write(small, stem)
+                with open(stem + ".json", "w") as f:
+                    json.dump(small, f, indent=1)
+                print(f"   kept, reduced: {kept} ({gen.describe(small)})")
+            failures += found
+    return failures
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("model")
+    ap.add_argument("model", nargs="?")
     ap.add_argument("--rel", default="0.005,0.01,0.02")
     ap.add_argument("--keep-parts", action="store_true",
                     help="meshoptimizer keeps the borders between the file's primitives")
@@ -102,72 +252,22 @@ def main():
                     help="file of `MODEL REL  reason` lines reported KNOWN, not failed")
     ap.add_argument("--mutate", type=float, default=0.0,
                     help="move our vertices by this many T at random (the judge must fail)")
+    ap.add_argument("--generate", type=int, default=0,
+                    help="judge N meshes of tools/mesh_generator.py instead of MODEL")
+    ap.add_argument("--gen-seed", type=int, default=1)
+    ap.add_argument("--gen-start", type=int, default=0)
+    ap.add_argument("--reduce-to", default=None,
+                    help="with --generate: write each failing mesh, reduced, into this folder")
     args = ap.parse_args()
-    known = set()
-    if args.known_failures:
-        with open(args.known_failures) as f:
-            for line in f:
-                words = line.split()
-                if len(words) >= 2 and not words[0].startswith("#"):
-                    known.add((words[0], float(words[1])))
-    failures = []
-    import meshoptimizer
-
-    with tempfile.TemporaryDirectory() as tmp:
-        orig = load(args.model)
-        # One vertex per position (a file splits vertices at UV and normal seams, which
-        # meshoptimizer would read as open borders and lock).
-        orig.merge_vertices(merge_tex=True, merge_norm=True)
-        diag = float(np.linalg.norm(orig.bounds[1] - orig.bounds[0]))
-        print(f"{args.model}: {len(orig.faces)} triangles, diagonal {diag:.4g}")
-        print(f"{'T/diag':>8} {'triangles':>10} {'ours H/diag':>12} {'meshopt H/diag':>15} {'ratio':>6}")
-        given = by_parts(args.model) if args.keep_parts else orig
-        if args.keep_parts:
-            print(f"meshoptimizer keeps the borders of the primitives: {len(given.vertices)} "
-                  f"vertices against {len(orig.vertices)} welded")
-        indices = given.faces.astype(np.uint32).ravel()
-        verts = given.vertices.astype(np.float32)
-        for rel in [float(x) for x in args.rel.split(",")]:
-            out = os.path.join(tmp, f"ours-{rel}.glb")
-            export(args.patchwork, args.model, out, rel * diag)
-            ours = load(out)
-            # Our vertices are the original's (half-edge collapses): outside its box, the two
-            # are not in the same frame.
-            off = float(max((orig.bounds[0] - ours.bounds[0]).max(),
-                            (ours.bounds[1] - orig.bounds[1]).max()))
-            if off > 1e-6 * diag:
-                sys.exit(f"our export reaches {off:.3g} outside the original's box: "
-                         "not the same frame")
-            n = len(ours.faces)
-            if args.mutate:
-                rng = np.random.default_rng(3)
-                step = rng.normal(size=ours.vertices.shape)
-                step /= np.linalg.norm(step, axis=1, keepdims=True)
-                ours = trimesh.Trimesh(ours.vertices + step * args.mutate * rel * diag,
-                                       ours.faces, process=False)
-            dst = np.zeros(indices.size, dtype=np.uint32)
-            k = meshoptimizer.simplify(dst, indices, verts, target_index_count=3 * n,
-                                       target_error=1.0)
-            theirs = trimesh.Trimesh(given.vertices, dst[:k].reshape(-1, 3), process=False)
-            h_ours, h_theirs = hausdorff(ours, orig) / diag, hausdorff(theirs, orig) / diag
-            ratio = h_ours / h_theirs
-            verdict = []
-            if h_ours > rel * (1 + 1e-5):
-                verdict.append(f"ours {h_ours:.3e} is beyond the tolerance {rel:g}: "
-                               "the certified bound is broken")
-            if args.max_ratio is not None and ratio > args.max_ratio:
-                verdict.append(f"ratio {ratio:.3f} > {args.max_ratio:g}")
-            mark = ""
-            if not verdict and (args.model, rel) in known:
-                mark = "  NOW PASSES: remove it from the known failures"
-            if verdict:
-                if (args.model, rel) in known and not any("certified" in v for v in verdict):
-                    mark = "  KNOWN: " + "; ".join(verdict)
-                else:
-                    mark = "  FAIL: " + "; ".join(verdict)
-                    failures.append(f"{args.model} at {rel:g}: " + "; ".join(verdict))
-            print(f"{rel:>8g} {n:>10} {h_ours:>12.2e} {h_theirs:>15.2e} {ratio:>6.3f}"
-                  f"   (meshopt {len(theirs.faces)} triangles){mark}", flush=True)
+    known = read_known(args.known_failures)
+    rels = [float(x) for x in args.rel.split(",")]
+    if args.generate:
+        failures = judge_generated(args, rels, known)
+    elif args.model:
+        failures = judge(args.model, rels, args.keep_parts, args.patchwork, args.max_ratio,
+                         known, args.mutate)
+    else:
+        ap.error("give a MODEL or --generate N")
     for f in failures:
         print("FAIL", f)
     return 1 if failures else 0
