@@ -33,8 +33,9 @@ use crate::mt::{MtHierarchy, MtParts};
 /// patches' coarse groups' hierarchies follow the patches' (`prep::groups`). 7: fan → original
 /// bounds against the whole original patch surface (`mt::nearest`): other (tighter) errors.
 /// 8: collapses ordered by their expected node error (`mt::build`: lazy re-keying), not the
-/// quadric alone: other hierarchies.
-pub(crate) const FORMAT_VERSION: u32 = 8;
+/// quadric alone: other hierarchies. 9: pieces of the original surface split up to 8 times,
+/// not 3 (`mt::build::PIECE_DEPTH`): other (tighter) errors on flat regions.
+pub(crate) const FORMAT_VERSION: u32 = 9;
 
 const MAGIC: &[u8; 8] = b"PWMTCACH";
 const HEADER: usize = 8 + 4 + 16 + 8 + 16;

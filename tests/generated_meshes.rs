@@ -1,0 +1,52 @@
+//! Meshes of the seeded mesh generator (`tools/mesh_generator.py`) that the meshoptimizer
+//! judge (`tools/mesh_vs_meshopt.py --generate N`, in CI) failed, reduced and kept in
+//! `models/generated/` with their recipes: each stays here as a regression test of what the
+//! judge found (issue 30: inputs nobody chose).
+
+use std::path::Path;
+
+use patchwork::model::PatchSurface;
+use patchwork::prep::{Hierarchies, LoadOptions, NoProgress, load_with_options};
+
+/// The triangles every mesh patch of `file` (in `models/generated/`) cuts at `relative` times
+/// the bounding-box diagonal, and the original's triangles.
+fn cut_triangles(file: &str, relative: f64) -> (usize, usize) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("models/generated")
+        .join(file);
+    let options = LoadOptions::new(Hierarchies::Build, None);
+    let scene = load_with_options(&path, &options, &NoProgress)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .scene;
+    let eps = relative * scene.bbox_diagonal();
+    let (mut drawn, mut original) = (0, 0);
+    let mut cut = Vec::new();
+    for p in &scene.patches {
+        let PatchSurface::Mesh(m) = &p.surface else {
+            panic!("{file}: a mesh scene");
+        };
+        m.hierarchy.cut(eps, &mut cut);
+        drawn += cut.len();
+        original += m.triangles.len();
+    }
+    (drawn, original)
+}
+
+/// mgen-1-5 reduced: two planes joined by a step (a cliff through the triangles), an irregular
+/// Delaunay triangulation of 750 random points (1 606 triangles). The planes need only their
+/// outlines and the cliff: meshoptimizer keeps 772 triangles at an error of 1e-6. A piece of
+/// the original surface is given to one fan triangle, so on a plane a piece straddling two fan
+/// triangles was bounded by its overhang until split along their side, and with at most 3
+/// splits per piece (`mt::build::PIECE_DEPTH`) the planes stopped simplifying at zero error:
+/// the whole mgen-1-5 kept 1 756 of its 3 150 triangles at 1e-9 of its diagonal and its cut
+/// at 0.5 % was 24× meshoptimizer's error at the same count (2.7× with 8 splits).
+#[test]
+fn flat_regions_simplify_at_zero_error() {
+    let (drawn, original) = cut_triangles("mgen-1-5-steps.obj", 1e-9);
+    eprintln!("mgen-1-5-steps: {drawn} of {original} triangles at 1e-9 of the diagonal");
+    assert_eq!(original, 1_606);
+    assert!(
+        drawn <= 450,
+        "{drawn} of {original} triangles at 1e-9 of the diagonal: the planes do not simplify"
+    );
+}
