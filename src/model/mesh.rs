@@ -172,13 +172,13 @@ pub struct MeshPatch {
 }
 
 /// A coarse group of a mesh's patches (issue 30; [`crate::mt::group`]): one patch made of
-/// its members' original triangles with its own hierarchy, drawn instead of them from its
-/// switch error on ([`crate::mt::group::select`]).
+/// its members' original triangles with its own hierarchy, drawn instead of them where its
+/// cut has no more triangles than theirs ([`crate::mt::group::select`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct MeshGroup {
     pub patch: std::sync::Arc<MeshPatch>,
-    /// What it stands for and from which error it is drawn (`f64::INFINITY` until its
-    /// hierarchy is built).
+    /// What it stands for and the finest error at which it may be drawn (`f64::INFINITY`
+    /// until its hierarchy is built).
     pub links: crate::mt::group::GroupLinks,
     /// Bounding sphere of its vertices.
     pub bounds: super::Sphere,

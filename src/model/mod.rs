@@ -263,17 +263,29 @@ impl Scene {
 
     /// The mesh units to draw when `eps(unit)` is the error wanted for each
     /// ([`crate::mt::group::select`] over [`Scene::mesh_groups`]): every patch exactly once,
-    /// by itself or by one group holding it. Without groups: every patch.
+    /// by itself or by one group holding it; a group where its cut has no more triangles
+    /// than its members would draw. Without groups: every patch.
     pub fn mesh_units(
         &self,
         eps: &mut dyn FnMut(crate::mt::group::Unit) -> f64,
     ) -> Vec<crate::mt::group::Unit> {
-        use crate::mt::group;
+        use crate::mt::group::{self, Unit};
         let links: Vec<group::GroupLinks> =
             self.mesh_groups.iter().map(|g| g.links.clone()).collect();
         let roots = group::roots(&links, self.patches.len());
+        let mut count = |u: Unit, e: f64| {
+            let hierarchy = match u {
+                Unit::Patch(p) => match &self.patches[p as usize].surface {
+                    PatchSurface::Mesh(m) => &m.hierarchy,
+                    // Groups hold mesh patches only.
+                    _ => return usize::MAX,
+                },
+                Unit::Group(g) => &self.mesh_groups[g as usize].patch.hierarchy,
+            };
+            group::cut_len(hierarchy, e)
+        };
         let mut out = Vec::with_capacity(roots.len());
-        group::select(&links, &roots, eps, &mut out);
+        group::select(&links, &roots, eps, &mut count, &mut out);
         out
     }
 

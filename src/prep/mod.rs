@@ -82,7 +82,6 @@ pub struct Loaded {
 #[derive(Clone, Debug, PartialEq)]
 pub struct PendingHierarchies {
     arc_size: f64,
-    patch_triangles: usize,
     cache: Option<(PathBuf, CacheKey)>,
 }
 
@@ -122,7 +121,7 @@ impl PendingHierarchies {
             groups
                 .par_iter_mut()
                 .for_each(|(p, _, _)| p.build_hierarchy(self.arc_size));
-            let groups = finish_groups(&patches, groups, self.patch_triangles);
+            let groups = finish_groups(&patches, groups);
             scene.mesh_groups = groups;
         }
         let mut warnings = Vec::new();
@@ -156,12 +155,10 @@ fn mesh_patches_of(scene: &Scene) -> Vec<&MeshPatch> {
 }
 
 /// The scene's groups from built group patches (members before groups): each one's bounds
-/// and switch error ([`crate::mt::group::switch_error`] against its members' hierarchies,
-/// one patch's `patch_triangles` as the target).
+/// and switch error ([`crate::mt::group::switch_error`] against its members' hierarchies).
 fn finish_groups(
     patches: &[&MeshPatch],
     groups: Vec<(MeshPatch, Vec<Unit>, u32)>,
-    patch_triangles: usize,
 ) -> Vec<MeshGroup> {
     let mut out: Vec<MeshGroup> = Vec::with_capacity(groups.len());
     for (patch, members, level) in groups {
@@ -172,7 +169,7 @@ fn finish_groups(
                     Unit::Group(g) => &out[g as usize].patch.hierarchy,
                 })
                 .collect();
-            crate::mt::group::switch_error(&patch.hierarchy, &theirs, patch_triangles)
+            crate::mt::group::switch_error(&patch.hierarchy, &theirs)
         };
         out.push(MeshGroup {
             bounds: Sphere::around(patch.positions.iter().map(|v| v.as_dvec3())),
@@ -283,11 +280,7 @@ pub fn load_with_options(
                 None
             }
         });
-    let pending = PendingHierarchies {
-        arc_size,
-        patch_triangles,
-        cache,
-    };
+    let pending = PendingHierarchies { arc_size, cache };
     let (parts, groups, pending) = match (cached, options.hierarchies) {
         (Some(hs), _) => {
             let mut hs = hs.into_iter();
@@ -333,15 +326,7 @@ pub fn load_with_options(
             (parts, groups, Some(pending))
         }
     };
-    let mut scene = scene_of(
-        parts,
-        groups,
-        &labels,
-        UpAxis::Y,
-        bbox,
-        weld_warnings,
-        patch_triangles,
-    );
+    let mut scene = scene_of(parts, groups, &labels, UpAxis::Y, bbox, weld_warnings);
     scene.unit = crate::io::stated_unit(path);
     Ok(Loaded {
         scene,
@@ -380,7 +365,7 @@ pub fn mesh_scene(
 ) -> Scene {
     let (parts, groups, labels, bbox, warnings) = mesh_parts(m, patch_triangles, groups);
     let (parts, groups) = build_hierarchies(parts, groups, arc_size, progress);
-    scene_of(parts, groups, &labels, up, bbox, warnings, patch_triangles)
+    scene_of(parts, groups, &labels, up, bbox, warnings)
 }
 
 /// What the patches of a mesh belong to: the part names and each patch's group.
@@ -471,7 +456,6 @@ fn scene_of(
     up: UpAxis,
     bbox: (glam::DVec3, glam::DVec3),
     warnings: Vec<String>,
-    patch_triangles: usize,
 ) -> Scene {
     let named = !labels.part_names.is_empty();
     let patches: Vec<Patch> = parts
@@ -498,7 +482,7 @@ fn scene_of(
         .into_iter()
         .map(|g| (g.patch, g.members, g.level))
         .collect();
-    scene.mesh_groups = finish_groups(&mesh_patches_of(&scene), groups, patch_triangles);
+    scene.mesh_groups = finish_groups(&mesh_patches_of(&scene), groups);
     if named {
         scene.parts = (labels.part_names.iter())
             .map(|name| crate::model::Part { name: name.clone() })
