@@ -316,10 +316,13 @@ fn spot_as_one_hierarchy_cuts_few_triangles_at_half_a_percent() {
 /// The switch rule (`mt::group::select`): a group is drawn exactly where its cut has no more
 /// triangles than what its members would draw at the same certified error — fewer triangles
 /// for the same tolerance, and never a group that costs more than what it replaces. Spot's
-/// group of its 4 patches: at 0.5 % of the diagonal its cut is 1 546 triangles against the
+/// group of its 4 patches: at 0.5 % of the diagonal its cut was 1 546 triangles against the
 /// patches' 1 719, but the old rule also wanted it within one patch target (1 500) and drew
-/// the patches; from about 10 % on its cut is larger than theirs (146 against 135) and the old
-/// rule's 12.5 % slack drew it anyway. Both seen failing before the rule changed.
+/// the patches; from about 10 % on its cut was larger than theirs (146 against 135) and the
+/// old rule's 12.5 % slack drew it anyway. Both seen failing before the rule changed. Since
+/// pieces split up to 8 times (`mt::build::PIECE_DEPTH`) the group costs no more than the
+/// patches at every error here (1 062 against 1 279 at 0.5 %, equal at 50 %); the patches
+/// winning is `mt::group`'s `a_group_is_drawn_only_where_it_costs_no_more_than_its_members`.
 #[test]
 fn spot_draws_its_group_exactly_where_the_group_is_cheaper() {
     use patchwork::prep::{Hierarchies, LoadOptions, NoProgress, load_with_options};
@@ -352,11 +355,8 @@ fn spot_draws_its_group_exactly_where_the_group_is_cheaper() {
             alone += 1;
         }
     }
-    // Both cases occur: the group pays at 0.5 % and not at the coarsest errors.
-    assert!(
-        grouped >= 3 && alone >= 1,
-        "{grouped} grouped, {alone} alone"
-    );
+    // The group pays from 0.1 % to 2 % at least.
+    assert!(grouped >= 5, "{grouped} grouped, {alone} alone");
     let tol = 5e-3 * diagonal;
     assert_eq!(scene.mesh_units(&mut |_| tol), vec![Unit::Group(0)]);
 }
