@@ -33,9 +33,12 @@ use crate::mt::{MtHierarchy, MtParts};
 /// patches' coarse groups' hierarchies follow the patches' (`prep::groups`). 7: fan → original
 /// bounds against the whole original patch surface (`mt::nearest`): other (tighter) errors.
 /// 8: collapses ordered by their expected node error (`mt::build`: lazy re-keying), not the
-/// quadric alone: other hierarchies. 9: pieces of the original surface split up to 8 times,
-/// not 3 (`mt::build::PIECE_DEPTH`): other (tighter) errors on flat regions.
-pub(crate) const FORMAT_VERSION: u32 = 9;
+/// quadric alone: other hierarchies. 9: height bounds at the patch border (`mt::bound`: the
+/// part of a fan triangle between a border chord and the original border it replaced) and over
+/// originals grown across the prism: other (tighter) errors. 10: pieces of the original
+/// surface split up to 8 times, not 3 (`mt::build::PIECE_DEPTH`): other (tighter) errors on
+/// flat regions.
+pub(crate) const FORMAT_VERSION: u32 = 10;
 
 const MAGIC: &[u8; 8] = b"PWMTCACH";
 const HEADER: usize = 8 + 4 + 16 + 8 + 16;

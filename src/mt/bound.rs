@@ -171,6 +171,17 @@ impl Polygon {
 /// along the normal, its two ends.
 pub(super) type Edge = ((u32, u32), bool, DVec3, DVec3);
 
+/// The stretches of the original patch border that live border edges at a triangle's corners
+/// stand for ([`height_over`]): per span, the range of `points` holding the original border
+/// vertices from one end of the live edge (the chord) to the other, in order, and whether the
+/// chord is a side of the triangle; `keys`, sorted, the vertex ids (sorted pair) of every
+/// edge of every chain.
+pub(super) struct Chains<'a> {
+    pub spans: &'a [(usize, usize, bool)],
+    pub points: &'a [DVec3],
+    pub keys: &'a [(u32, u32)],
+}
+
 /// The height-field bound of `tri` over the original triangles `originals` (corners and
 /// vertex ids): the farthest any point of `tri` is from the original surface, when the
 /// originals, seen along `tri`'s normal, cover `tri` without folding over it.
@@ -184,9 +195,33 @@ pub(super) type Edge = ((u32, u32), bool, DVec3, DVec3);
 /// and one original covers its centroid, the union holds all of `tri` (its interior is
 /// connected). `None` when the cover or the facing fails: the caller bounds `tri` otherwise.
 /// `edges` is scratch.
+///
+/// At the patch border (`chains`, else empty) the originals may leave uncovered the parts
+/// of `tri` between a live border edge (a chord, `tri`'s side or one at its corner) and the
+/// zigzag of original border edges it replaced (each chain's originals must be among
+/// `originals`):
+///
+/// Let `m(q)` be how many originals' projections hold the point `q` of `tri`'s interior.
+/// Crossing an edge shared by two facing originals leaves `m` as it is; the only other
+/// edges allowed into the interior are chain edges, which one original each uses (a patch
+/// border edge), so crossing one changes `m` by ±1. With `m = 1` at the centroid `c` (one
+/// original holds it, strictly, and no other touches it), `c` outside every closed chain
+/// `Γ` (the chain and its chord; even crossing number) and no chord entering the interior,
+/// a generic uncovered `q` (`m(q) = 0`) has the segment `qc` crossing the chains an odd
+/// number of times, and no chord, so `q` is inside some `Γ`. The ray from `q` away from that
+/// chord's line, perpendicular to it (`±u`), never meets the line again, so it crosses the
+/// chain, at a segment `s = P_i P_{i+1}` (in projection): `q` lies in `Z_s`, the points on
+/// that side of the line between it and `s` along `u` — convex (the part of `s` on that side
+/// swept towards the line), cut out of the plane by the line, by `e·x` within the range of
+/// `s` along the chord (`e`) and by the side of `s`'s line facing the chord. `P_i P_{i+1}` is
+/// part of the original surface and the distance to a segment is convex, so over
+/// `tri ∩ Z_s` it is at most its largest value at a corner. Generic points are dense and the
+/// distance is continuous: the bound holds for every point. Covered points are bounded by
+/// their height as above. `None` when a condition fails.
 pub(super) fn height_over(
     tri: &Piece,
     originals: &[(Piece, [u32; 3])],
+    chains: &Chains<'_>,
     edges: &mut Vec<Edge>,
 ) -> Option<f64> {
     let [a, b, c] = *tri;
@@ -194,18 +229,13 @@ pub(super) fn height_over(
     if n == DVec3::ZERO {
         return None;
     }
-    let scale = a.distance(b).max(b.distance(c)).max(c.distance(a));
-    let margin = 1e-9 * scale;
-    // Inward side planes: a point is inside the prism when all three are ≥ 0.
-    let sides: [(DVec3, DVec3); 3] = std::array::from_fn(|k| {
-        (
-            tri[k],
-            n.cross(tri[(k + 1) % 3] - tri[k]).normalize_or_zero(),
-        )
-    });
+    let (sides, margin) = prism(tri);
     let centroid = (a + b + c) / 3.0;
     let mut covered = false;
     let mut worst = 0.0f64;
+    // Originals whose projection holds the centroid (margin included), whether one strictly,
+    // and whether a chain edge enters the interior.
+    let (mut holding, mut strictly, mut uncovered) = (0usize, false, false);
     edges.clear();
     for (o, ids) in originals {
         // Signed distances of the corners inside each side plane: an original wholly outside
@@ -255,6 +285,22 @@ pub(super) fn height_over(
             });
             covered = inside;
         }
+        if !chains.spans.is_empty() {
+            // How far inside each side of the original's projection the centroid is.
+            let within = std::array::from_fn::<f64, 3, _>(|k| {
+                let (p, q) = (o[k], o[(k + 1) % 3]);
+                let len = p.distance(q);
+                if len > 0.0 {
+                    n.dot((q - p).cross(centroid - p)) / len
+                } else {
+                    f64::NEG_INFINITY
+                }
+            });
+            if within.iter().all(|&x| x >= -margin) {
+                holding += 1;
+                strictly |= within.iter().all(|&x| x > margin);
+            }
+        }
     }
     if !covered {
         return None;
@@ -266,35 +312,148 @@ pub(super) fn height_over(
         while end < edges.len() && edges[end].0 == edges[k].0 {
             end += 1;
         }
-        let inner = end - k == 2 && edges[k].1 && edges[k + 1].1;
+        // Two facing originals on either side: the edge runs opposite ways in them.
+        let inner = end - k == 2 && edges[k].1 && edges[k + 1].1 && edges[k].2 == edges[k + 1].3;
         if !inner {
             // A boundary edge: it must not enter the interior of `tri`'s prism.
-            let (p, q) = (edges[k].2, edges[k].3);
-            let (mut lo, mut hi) = (0.0f64, 1.0f64);
-            for &(origin, inward) in &sides {
-                let (sp, sq) = (
-                    inward.dot(p - origin) - margin,
-                    inward.dot(q - origin) - margin,
-                );
-                // Strictly inside where sp + t (sq − sp) > 0.
-                if sp <= 0.0 && sq <= 0.0 {
-                    hi = -1.0;
-                    break;
+            if enters(&sides, margin, edges[k].2, edges[k].3) {
+                if end - k == 1 && chains.keys.binary_search(&edges[k].0).is_ok() {
+                    uncovered = true;
+                } else {
+                    return None;
                 }
-                let t = sp / (sp - sq);
-                if sp <= 0.0 {
-                    lo = lo.max(t);
-                } else if sq <= 0.0 {
-                    hi = hi.min(t);
-                }
-            }
-            if lo < hi {
-                return None;
             }
         }
         k = end;
     }
+    if uncovered {
+        if holding != 1 || !strictly {
+            return None;
+        }
+        for &(start, stop, own) in chains.spans {
+            let points = &chains.points[start..stop];
+            let (first, last) = (points[0], points[points.len() - 1]);
+            if !own && enters(&sides, margin, first, last) {
+                return None;
+            }
+            worst = worst.max(between_chord_and_chain(tri, n, points, own, margin)?);
+        }
+    }
     Some(worst * (1.0 + 1e-12))
+}
+
+/// The inward side planes of `tri`'s prism (a point is inside when all three are ≥ 0: a
+/// point on each side and its inward normal) and the margin the tests allow (a relative 1e-9
+/// of the longest side).
+pub(super) fn prism(tri: &Piece) -> ([(DVec3, DVec3); 3], f64) {
+    let [a, b, c] = *tri;
+    let n = (b - a).cross(c - a).normalize_or_zero();
+    let scale = a.distance(b).max(b.distance(c)).max(c.distance(a));
+    let sides = std::array::from_fn(|k| {
+        (
+            tri[k],
+            n.cross(tri[(k + 1) % 3] - tri[k]).normalize_or_zero(),
+        )
+    });
+    (sides, 1e-9 * scale)
+}
+
+/// Whether the segment `p..q` enters the interior of the prism `sides` (shrunk by `margin`).
+pub(super) fn enters(sides: &[(DVec3, DVec3); 3], margin: f64, p: DVec3, q: DVec3) -> bool {
+    let (mut lo, mut hi) = (0.0f64, 1.0f64);
+    for &(origin, inward) in sides {
+        let (sp, sq) = (
+            inward.dot(p - origin) - margin,
+            inward.dot(q - origin) - margin,
+        );
+        // Strictly inside where sp + t (sq − sp) > 0.
+        if sp <= 0.0 && sq <= 0.0 {
+            return false;
+        }
+        let t = sp / (sp - sq);
+        if sp <= 0.0 {
+            lo = lo.max(t);
+        } else if sq <= 0.0 {
+            hi = hi.min(t);
+        }
+    }
+    lo < hi
+}
+
+/// The largest distance from a point of `tri` between the chord from the first to the last
+/// of `points` (original border vertices; `own`: a side of `tri`) and the chain they make to
+/// that chain, as [`height_over`] argues; `None` when the centroid is inside the closed
+/// chain or within `margin` of it.
+fn between_chord_and_chain(
+    tri: &Piece,
+    n: DVec3,
+    points: &[DVec3],
+    own: bool,
+    margin: f64,
+) -> Option<f64> {
+    let a = points[0];
+    let flat = |p: DVec3| p - n * n.dot(p - a);
+    let e = (flat(points[points.len() - 1]) - a).normalize_or_zero();
+    if e == DVec3::ZERO {
+        return None;
+    }
+    let u = n.cross(e);
+    let plane = |p: DVec3| (e.dot(p - a), u.dot(p - a));
+    // The centroid must be outside the closed chain (crossing number even), clear of it.
+    let centroid = (tri[0] + tri[1] + tri[2]) / 3.0;
+    let (cx, cy) = plane(centroid);
+    let mut inside = false;
+    for i in 0..points.len() {
+        let (p, q) = (flat(points[i]), flat(points[(i + 1) % points.len()]));
+        if centroid.distance(crate::geom::closest_point_on_segment(centroid, p, q)) <= margin {
+            return None;
+        }
+        let ((px, py), (qx, qy)) = (plane(p), plane(q));
+        if (py > cy) != (qy > cy) && cx < px + (qx - px) * (cy - py) / (qy - py) {
+            inside = !inside;
+        }
+    }
+    if inside {
+        return None;
+    }
+    // The sides of the chord's line that `tri`'s interior reaches: for its own side, the
+    // centroid's; else any a corner is strictly on.
+    let reach = |sign: f64| match own {
+        true => sign * cy > 0.0,
+        false => tri.iter().any(|&x| sign * u.dot(x - a) > 0.0),
+    };
+    let mut far = 0.0f64;
+    for sign in [1.0, -1.0] {
+        if !reach(sign) {
+            continue;
+        }
+        let up = u * sign;
+        for w in points.windows(2) {
+            let (p, q) = (flat(w[0]), flat(w[1]));
+            let (tp, tq) = (e.dot(p - a), e.dot(q - a));
+            // `Z_s` on this side: beyond the line, along the chord within the segment's
+            // range, on the line's side of the segment.
+            let mut part = Polygon::triangle(tri)
+                .clip(a - up * margin, up)
+                .clip(a + e * (tp.min(tq) - margin), e)
+                .clip(a + e * (tp.max(tq) + margin), -e);
+            let mut away = n.cross(q - p).normalize_or_zero();
+            if away.dot(up) < 0.0 {
+                away = -away;
+            }
+            part = if away.dot(up) > 1e-6 {
+                part.clip(p + away * margin, -away)
+            } else {
+                // Along `u` itself: below its higher end (a superset).
+                let top = up.dot(p - a).max(up.dot(q - a));
+                part.clip(a + up * (top + margin), -up)
+            };
+            for &x in part.corners() {
+                far = far.max(x.distance(crate::geom::closest_point_on_segment(x, w[0], w[1])));
+            }
+        }
+    }
+    Some(far)
 }
 
 /// A sphere around a piece: its centroid and the distance to its farthest corner.
@@ -403,5 +562,67 @@ mod tests {
         let whole = area(&piece);
         // The part of the piece inside the triangle (x + y ≤ 2) is measured exactly.
         assert!(inside > 0.5 * whole, "{inside} of {whole}");
+    }
+
+    /// A strip of originals whose border zigzags into and out of a fan triangle's side (the
+    /// chord): the part of the triangle between the chord and the inward zigzag is covered by
+    /// no original. The bound holds a dense measurement of the distance to the strip (broken
+    /// on purpose, the chain term halved, it fell short of it), and is `None` without the
+    /// chain (the cover fails).
+    #[test]
+    fn the_border_bound_holds_a_dense_measurement() {
+        let n = 8u32;
+        // Border row (ids 0..=n) zigzagging about y = 0; inner row (ids n+1..) at y = 1.5.
+        let border = |i: u32| {
+            let y = match i {
+                0 => 0.0,
+                _ if i == n => 0.0,
+                _ if i % 2 == 1 => 0.3,
+                _ => -0.2,
+            };
+            DVec3::new(i as f64, y, 0.05 * (i % 3) as f64)
+        };
+        let inner = |i: u32| DVec3::new(i as f64, 1.5, 0.02 * (i % 2) as f64);
+        let mut originals = Vec::new();
+        for i in 0..n {
+            let (p, q, r, s) = (i, i + 1, n + 1 + i, n + 2 + i);
+            originals.push(([border(i), border(i + 1), inner(i)], [p, q, r]));
+            originals.push(([border(i + 1), inner(i + 1), inner(i)], [q, s, r]));
+        }
+        let tri = [border(0), border(n), inner(n / 2)];
+        let points: Vec<DVec3> = (0..=n).map(border).collect();
+        let keys: Vec<(u32, u32)> = (0..n).map(|i| (i, i + 1)).collect();
+        let spans = [(0, points.len(), true)];
+        let chains = Chains {
+            spans: &spans,
+            points: &points,
+            keys: &keys,
+        };
+        let mut edges = Vec::new();
+        let bound = height_over(&tri, &originals, &chains, &mut edges).expect("a bound");
+        let none = Chains {
+            spans: &[],
+            points: &[],
+            keys: &[],
+        };
+        assert_eq!(height_over(&tri, &originals, &none, &mut edges), None);
+        let k = 80;
+        let mut dense = 0.0f64;
+        for i in 0..=k {
+            for j in 0..=k - i {
+                let (u, v) = (i as f64 / k as f64, j as f64 / k as f64);
+                let q = tri[0] + (tri[1] - tri[0]) * u + (tri[2] - tri[0]) * v;
+                let d = originals
+                    .iter()
+                    .map(|(o, _)| point_triangle_distance(q, o[0], o[1], o[2]))
+                    .fold(f64::INFINITY, f64::min);
+                dense = dense.max(d);
+            }
+        }
+        assert!(dense <= bound, "dense {dense} above the bound {bound}");
+        assert!(
+            bound < 1.5 * dense,
+            "bound {bound} loose over dense {dense}"
+        );
     }
 }

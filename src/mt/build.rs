@@ -185,6 +185,16 @@ struct Builder {
     scratch_near: Vec<u32>,
     scratch_originals: Vec<(Piece, [u32; 3])>,
     scratch_edges3: Vec<bound::Edge>,
+    /// Per original vertex: its original border neighbours and the original triangle of
+    /// each border edge (the chains [`Builder::height_bound`] walks).
+    border_links: Vec<Vec<(u32, u32)>>,
+    /// Per original triangle, the original triangle across each side (`tri[k]` to
+    /// `tri[k + 1]`; [`NEVER`] on the border or where more than two meet).
+    across: Vec<[u32; 3]>,
+    scratch_chain: Vec<(u32, u32)>,
+    scratch_chain_points: Vec<DVec3>,
+    scratch_spans: Vec<(usize, usize, bool)>,
+    scratch_keys: Vec<(u32, u32)>,
     /// Emptied cover lists of removed triangles, reused by new ones.
     spare_covers: Vec<Vec<u32>>,
     /// Per vertex: a counter bumped whenever a triangle around it is removed (what
@@ -218,7 +228,8 @@ impl Builder {
         // ordered among the others by what it moves the border (weighted 1e3, border collapses
         // came last, each inheriting the errors of the coarse interior around it).
         let mut border: Vec<Option<Vec<u32>>> = vec![None; n];
-        for tri in triangles {
+        let mut border_links: Vec<Vec<(u32, u32)>> = vec![Vec::new(); n];
+        for (t, tri) in triangles.iter().enumerate() {
             let [a, b, c] = tri.map(|i| pos[i as usize]);
             let normal = (b - a).cross(c - a).normalize_or_zero();
             for k in 0..3 {
@@ -233,10 +244,29 @@ impl Builder {
                 for (x, y) in [(u, v), (v, u)] {
                     quadric[x as usize].add(&q);
                     border[x as usize].get_or_insert_with(Vec::new).push(y);
+                    border_links[x as usize].push((y, t as u32));
                 }
             }
         }
         let m = triangles.len();
+        let mut across = vec![[NEVER; 3]; m];
+        let mut first_use: IntMap<(u32, u32), u32> = IntMap::default();
+        for (t, tri) in triangles.iter().enumerate() {
+            for k in 0..3 {
+                let (u, v) = (tri[k], tri[(k + 1) % 3]);
+                let key = (u.min(v), u.max(v));
+                if edge_uses[&key] != 2 {
+                    continue;
+                }
+                let here = 3 * t as u32 + k as u32;
+                if let Some(&there) = first_use.get(&key) {
+                    across[t][k] = there / 3;
+                    across[(there / 3) as usize][(there % 3) as usize] = t as u32;
+                } else {
+                    first_use.insert(key, here);
+                }
+            }
+        }
         let corners: Vec<[DVec3; 3]> = triangles
             .iter()
             .map(|t| t.map(|i| pos[i as usize]))
@@ -289,6 +319,12 @@ impl Builder {
             scratch_near: Vec::new(),
             scratch_originals: Vec::new(),
             scratch_edges3: Vec::new(),
+            border_links,
+            across,
+            scratch_chain: Vec::new(),
+            scratch_chain_points: Vec::new(),
+            scratch_spans: Vec::new(),
+            scratch_keys: Vec::new(),
             spare_covers: Vec::new(),
             ring: vec![0; n],
             scratch_predict: Vec::new(),

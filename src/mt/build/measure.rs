@@ -6,7 +6,7 @@ use glam::DVec3;
 
 use super::super::bound::{self, Piece};
 use super::super::nearest::PieceBound;
-use super::{Builder, FAN_DEPTH, PIECE_DEPTH, SLACK, samples};
+use super::{Builder, FAN_DEPTH, NEVER, PIECE_DEPTH, SLACK, samples};
 use crate::geom::point_triangle_distance;
 
 impl Builder {
@@ -164,8 +164,11 @@ impl Builder {
     }
 
     /// [`bound::height_over`] for fan triangle `t` over the original triangles of the pieces
-    /// it covers and those covered by the triangles across its edges (live ones, the fan's
-    /// included): the surface under it and around its edges.
+    /// it covers, grown across every original edge that enters the prism over `t` (up to a
+    /// cap): the surface under it. Each live border edge at a corner of `t` adds the original
+    /// border edges it replaced and their triangles ([`Builder::border_chain`]), so the parts
+    /// of `t` between such an edge and its chain are bounded too. Any list of originals
+    /// gives a certified bound (or none): the list only decides how often one is found.
     fn height_bound(&mut self, t: u32) -> Option<f64> {
         let mut near = std::mem::take(&mut self.scratch_near);
         near.clear();
@@ -177,22 +180,68 @@ impl Builder {
         }
         let g = self.origin_generation;
         let tri = self.tris[t as usize];
-        let take = |x: u32, near: &mut Vec<u32>, mark: &mut Vec<u32>| {
-            for &o in &self.covers[x as usize] {
-                let origin = self.piece_origin[o as usize];
-                if mark[origin as usize] != g {
-                    mark[origin as usize] = g;
-                    near.push(origin);
-                }
-            }
-        };
         let mut mark = std::mem::take(&mut self.origin_mark);
-        take(t, &mut near, &mut mark);
+        let mut chain = std::mem::take(&mut self.scratch_chain);
+        let mut points = std::mem::take(&mut self.scratch_chain_points);
+        let mut spans = std::mem::take(&mut self.scratch_spans);
+        let mut keys = std::mem::take(&mut self.scratch_keys);
+        points.clear();
+        spans.clear();
+        keys.clear();
+        for &o in &self.covers[t as usize] {
+            let origin = self.piece_origin[o as usize];
+            if mark[origin as usize] != g {
+                mark[origin as usize] = g;
+                near.push(origin);
+            }
+        }
         for k in 0..3 {
-            let (u, v) = (tri[k], tri[(k + 1) % 3]);
-            for &x in &self.around[u as usize] {
-                if x != t && self.tris[x as usize].contains(&v) {
-                    take(x, &mut near, &mut mark);
+            let u = tri[k];
+            // The live border edges at the corner, each once (from its first corner of `t`).
+            let Some(along) = &self.border[u as usize] else {
+                continue;
+            };
+            for &v in along {
+                if tri[..k].contains(&v) {
+                    continue;
+                }
+                chain.clear();
+                if !self.border_chain(u, v, &mut chain) {
+                    continue;
+                }
+                let start = points.len();
+                for (i, &(w, via)) in chain.iter().enumerate() {
+                    points.push(self.pos[w as usize]);
+                    if i > 0 {
+                        let prev = chain[i - 1].0;
+                        keys.push((prev.min(w), prev.max(w)));
+                        if mark[via as usize] != g {
+                            mark[via as usize] = g;
+                            near.push(via);
+                        }
+                    }
+                }
+                spans.push((start, points.len(), tri.contains(&v)));
+            }
+        }
+        keys.sort_unstable();
+        // Grown across every original edge that enters the prism over `t` (up to a cap): the
+        // union's boundary inside the prism is then the patch border and the folds.
+        let (sides, margin) = bound::prism(&self.corners[t as usize]);
+        let cap = 4 * near.len() + 64;
+        let mut i = 0;
+        while i < near.len() && near.len() < cap {
+            let o = near[i] as usize;
+            i += 1;
+            let c = self.corners[o];
+            for k in 0..3 {
+                let x = self.across[o][k];
+                if x != NEVER
+                    && mark[x as usize] != g
+                    && bound::enters(&sides, margin, c[k], c[(k + 1) % 3])
+                {
+                    mark[x as usize] = g;
+                    near.push(x);
                 }
             }
         }
@@ -204,11 +253,65 @@ impl Builder {
                 .map(|&o| (self.corners[o as usize], self.tris[o as usize])),
         );
         let mut edges = std::mem::take(&mut self.scratch_edges3);
-        let bound = bound::height_over(&self.corners[t as usize], &originals, &mut edges);
+        let chains = bound::Chains {
+            spans: &spans,
+            points: &points,
+            keys: &keys,
+        };
+        let bound = bound::height_over(&self.corners[t as usize], &originals, &chains, &mut edges);
         self.scratch_edges3 = edges;
         self.scratch_originals = originals;
         self.scratch_near = near;
+        self.scratch_chain = chain;
+        self.scratch_chain_points = points;
+        self.scratch_spans = spans;
+        self.scratch_keys = keys;
         bound
+    }
+
+    /// The original border edges that the border edge from `u` to `v` (live vertices)
+    /// stands for, appended to `out` from `u` to `v`: each vertex with the original triangle of
+    /// the edge that reaches it ([`NEVER`] for `u`). Border vertices are only ever collapsed
+    /// onto a border neighbour, their neighbour taken over (`Builder::collapse`), so a live
+    /// border edge replaces the original border path between its ends through removed
+    /// vertices (each with two border neighbours). `false`, nothing appended, when no such path
+    /// or two (both ways round a loop) lead from `u` to `v`.
+    fn border_chain(&self, u: u32, v: u32, out: &mut Vec<(u32, u32)>) -> bool {
+        let start = out.len();
+        let mut found = false;
+        for &(first, via) in &self.border_links[u as usize] {
+            let from = out.len();
+            out.push((u, NEVER));
+            let (mut prev, mut cur, mut via) = (u, first, via);
+            loop {
+                out.push((cur, via));
+                if self.vertex_removed_by[cur as usize] == NEVER
+                    || out.len() - from > self.pos.len()
+                {
+                    break;
+                }
+                let links = &self.border_links[cur as usize];
+                if links.len() != 2 {
+                    break;
+                }
+                let next = if links[0].0 == prev {
+                    links[1]
+                } else {
+                    links[0]
+                };
+                (prev, cur, via) = (cur, next.0, next.1);
+            }
+            if cur == v && self.vertex_removed_by[cur as usize] == NEVER {
+                if found {
+                    out.truncate(start);
+                    return false;
+                }
+                found = true;
+            } else {
+                out.truncate(from);
+            }
+        }
+        found
     }
 
     /// The fan triangle whose farthest point from piece `o` is nearest, that distance (exact,
