@@ -290,9 +290,10 @@ fn the_export_command_draws_the_groups() {
 /// The collapse order follows the node errors (`mt::build`: candidates re-keyed by a lower
 /// bound of their certified error when popped). Ordered by the quadric alone, a collapse cheap
 /// by quadric but high in error came early and passed its error to every collapse around it:
-/// with the re-keying switched off, Spot as one hierarchy (its group) cuts 1 967 triangles at
+/// with the re-keying switched off, Spot as one hierarchy (its group) cut 1 967 triangles at
 /// 0.5 % of the diagonal; ordered by error, 1 546 (meshoptimizer's distance at that count is
-/// the same, 4.88e-3 against our 4.84e-3).
+/// the same, 4.88e-3 against our 4.84e-3). Re-measured 2026-12-05 with border height bounds
+/// and pieces split up to 8 times: 1 199 with the re-keying off (above the bound), 1 062 on.
 #[test]
 fn spot_as_one_hierarchy_cuts_few_triangles_at_half_a_percent() {
     use patchwork::prep::{Hierarchies, LoadOptions, NoProgress, load_with_options};
@@ -307,7 +308,7 @@ fn spot_as_one_hierarchy_cuts_few_triangles_at_half_a_percent() {
     group.hierarchy.cut(5e-3 * scene.bbox_diagonal(), &mut cut);
     eprintln!("Spot's group: {} triangles at 0.5 %", cut.len());
     assert!(
-        cut.len() <= 1_600,
+        cut.len() <= 1_120,
         "Spot's group cuts {} triangles at 0.5 %",
         cut.len()
     );
