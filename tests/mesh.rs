@@ -460,11 +460,18 @@ fn moved_mesh_patches_are_uploaded_with_their_cut_strips() {
         assert_eq!(gpu.triangle_count() as usize, drawn);
         if primitives != Primitives::List {
             // Measured 2026-12-04 (certified node errors): mts 2.33, repair 1.54 per triangle
-            // with restarts; 2.94 and 1.63 with GL's degenerate joins.
+            // with restarts; 2.94 and 1.63 with GL's degenerate joins. 2026-12-05, pieces split
+            // 8 times and border height bounds (a cut of half the triangles, see
+            // `bunny_golden_and_static_arcs_draw_what_uploaded_triangles_draw`): 2.50
+            // and 1.75; GL 3.19 and 1.95.
             let bound = match renderer.strip_join {
-                patchwork::strips::Join::Restart => 2.5,
-                patchwork::strips::Join::Degenerate => 3.1,
+                patchwork::strips::Join::Restart => 2.62,
+                patchwork::strips::Join::Degenerate => 3.34,
             };
+            eprintln!(
+                "{primitives:?}: {:.3} indices per triangle",
+                gpu.index_count() as f64 / drawn as f64
+            );
             assert!(
                 (gpu.index_count() as f64) < bound * drawn as f64,
                 "{primitives:?}: {} indices for {drawn} triangles",
