@@ -287,6 +287,17 @@ fn the_export_command_draws_the_groups() {
     );
 }
 
+/// `models/spot.obj` loaded with its hierarchies built and its patches grouped.
+fn spot_with_groups() -> Scene {
+    use patchwork::prep::{Hierarchies, LoadOptions, NoProgress, load_with_options};
+    let path = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/models/spot.obj"));
+    let mut options = LoadOptions::new(Hierarchies::Build, None);
+    options.groups = true;
+    load_with_options(path, &options, &NoProgress)
+        .expect("loads")
+        .scene
+}
+
 /// The collapse order follows the node errors (`mt::build`: candidates re-keyed by a lower
 /// bound of their certified error when popped). Ordered by the quadric alone, a collapse cheap
 /// by quadric but high in error came early and passed its error to every collapse around it:
@@ -296,13 +307,7 @@ fn the_export_command_draws_the_groups() {
 /// and pieces split up to 8 times: 1 199 with the re-keying off (above the bound), 1 062 on.
 #[test]
 fn spot_as_one_hierarchy_cuts_few_triangles_at_half_a_percent() {
-    use patchwork::prep::{Hierarchies, LoadOptions, NoProgress, load_with_options};
-    let path = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/models/spot.obj"));
-    let mut options = LoadOptions::new(Hierarchies::Build, None);
-    options.groups = true;
-    let scene = load_with_options(path, &options, &NoProgress)
-        .expect("loads")
-        .scene;
+    let scene = spot_with_groups();
     let mut cut = Vec::new();
     let group = &scene.mesh_groups[0].patch;
     group.hierarchy.cut(5e-3 * scene.bbox_diagonal(), &mut cut);
@@ -326,13 +331,7 @@ fn spot_as_one_hierarchy_cuts_few_triangles_at_half_a_percent() {
 /// winning is `mt::group`'s `a_group_is_drawn_only_where_it_costs_no_more_than_its_members`.
 #[test]
 fn spot_draws_its_group_exactly_where_the_group_is_cheaper() {
-    use patchwork::prep::{Hierarchies, LoadOptions, NoProgress, load_with_options};
-    let path = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/models/spot.obj"));
-    let mut options = LoadOptions::new(Hierarchies::Build, None);
-    options.groups = true;
-    let scene = load_with_options(path, &options, &NoProgress)
-        .expect("loads")
-        .scene;
+    let scene = spot_with_groups();
     assert_eq!((scene.patches.len(), scene.mesh_groups.len()), (4, 1));
     let diagonal = scene.bbox_diagonal();
     let mut cut = Vec::new();
