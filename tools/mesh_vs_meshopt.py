@@ -24,7 +24,7 @@ the whole welded original. Without primitives (OBJ, PLY, one primitive) the two 
 
 As a judge (CI runs it on every shipped mesh): the run fails (exit 1) when our sampled
 Hausdorff distance exceeds the tolerance T asked for (every cut is certified within T, so a
-sample beyond it is a broken bound; float32 positions allow 1e-5 of T), or, with
+sample beyond it is a broken bound; float32 positions allow 1e-5 of T and their rounding), or, with
 `--max-ratio R`, when ours / meshopt exceeds R — except for the (model, rel) pairs listed in
 `--known-failures FILE` (lines `MODEL REL  reason`; MODEL as given on the command line),
 which are reported KNOWN. `--mutate K` moves every vertex of our export by K·T in a random
@@ -142,6 +142,10 @@ def judge(model, rels, keep_parts, patchwork, max_ratio, known, mutate=0.0, name
         indices = given.faces.astype(np.uint32).ravel()
         verts = given.vertices.astype(np.float32)
         centre, scale = (orig.bounds[0] + orig.bounds[1]) / 2, FRAME_DIAGONAL / diag
+        # We read and write positions as float32: a vertex may move by half a unit in the
+        # last place of its largest coordinate (2^-24 relative; mgen-2-3 sits 2.7e5 from the
+        # origin, 1.2e-6 of its diagonal moved by rounding alone).
+        rounding = float(np.abs(orig.bounds).max()) * 2.0 ** -23
         judged = framed(orig, centre, scale)
         # The measurement itself: the original's own samples lie on it.
         self_distance = one_sided(judged, judged, 10000, 5) / FRAME_DIAGONAL
@@ -162,7 +166,7 @@ def judge(model, rels, keep_parts, patchwork, max_ratio, known, mutate=0.0, name
             # are not in the same frame.
             off = float(max((orig.bounds[0] - ours.bounds[0]).max(),
                             (ours.bounds[1] - orig.bounds[1]).max()))
-            if off > 1e-6 * diag:
+            if off > 1e-6 * diag + rounding:
                 failures.append(f"{name} at {rel:g}: our export reaches {off:.3g} outside the "
                                 "original's box: not the same frame")
                 say("FAIL", failures[-1])
@@ -182,7 +186,7 @@ def judge(model, rels, keep_parts, patchwork, max_ratio, known, mutate=0.0, name
             h_theirs = hausdorff(framed(theirs, centre, scale), judged) / FRAME_DIAGONAL
             ratio = h_ours / h_theirs if h_theirs > 0 else (1.0 if h_ours == 0 else math.inf)
             verdict = []
-            if h_ours > rel * (1 + 1e-5):
+            if h_ours > rel * (1 + 1e-5) + rounding / diag:
                 verdict.append(f"ours {h_ours:.3e} is beyond the tolerance {rel:g}: "
                                "the certified bound is broken")
             if max_ratio is not None and ratio > max_ratio:
