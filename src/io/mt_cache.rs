@@ -37,8 +37,9 @@ use crate::mt::{MtHierarchy, MtParts};
 /// part of a fan triangle between a border chord and the original border it replaced) and over
 /// originals grown across the prism: other (tighter) errors. 10: pieces of the original
 /// surface split up to 8 times, not 3 (`mt::build::PIECE_DEPTH`): other (tighter) errors on
-/// flat regions.
-pub(crate) const FORMAT_VERSION: u32 = 10;
+/// flat regions. 11: hierarchies built across creases (`MtHierarchy::build_across_seams`):
+/// other hierarchies wherever vertices are split by their normals.
+pub(crate) const FORMAT_VERSION: u32 = 11;
 
 const MAGIC: &[u8; 8] = b"PWMTCACH";
 const HEADER: usize = 8 + 4 + 16 + 8 + 16;

@@ -162,6 +162,15 @@ pub struct MeshPatch {
     /// boundary of the mesh (one triangle of the whole mesh uses it: sharp) or where the mesh
     /// was cut into patches (two do: no edge); see `model::edges`.
     pub border_kinds: Vec<Vec<EdgeKind>>,
+    /// Where vertices are split by their normals (a crease, [`TriMesh::position_ids`]): per
+    /// vertex, the patch's first vertex at its position; empty when no vertex is split.
+    pub position_of: Vec<u32>,
+    /// With split vertices, the border loops of the surface with each position one vertex
+    /// (the patch's outline: where it meets other patches or the mesh ends, its creases
+    /// inside) and their kinds, as [`MeshPatch::borders`]: the borders of the hierarchy's cuts
+    /// (built across creases, [`crate::mt::MtHierarchy::build_across_seams`]). Empty without.
+    pub outline: Vec<Vec<u32>>,
+    pub outline_kinds: Vec<Vec<EdgeKind>>,
     /// Indices of the patch's triangles in the partitioned mesh.
     pub source_triangles: Vec<u32>,
     /// Index in the partitioned mesh of every patch vertex.
@@ -191,7 +200,11 @@ impl MeshPatch {
     /// `arc_size` triangles per arc on average (no reduction below 1.5), merging only nodes
     /// whose errors are within [`crate::mt::MAX_MERGE_ERROR_RATIO`] of each other.
     pub fn build_hierarchy(&mut self, arc_size: f64) {
-        self.hierarchy = crate::mt::MtHierarchy::build(&self.positions, &self.triangles);
+        self.hierarchy = crate::mt::MtHierarchy::build_across_seams(
+            &self.positions,
+            &self.normals,
+            &self.triangles,
+        );
         if arc_size >= 1.5 {
             self.hierarchy
                 .reduce_within(arc_size, crate::mt::MAX_MERGE_ERROR_RATIO);
@@ -266,20 +279,50 @@ pub(crate) fn extract(
         tris.push(tri);
     }
     let borders = border_loops(&tris);
+    let kind = |a: u32, b: u32| match uses.get(&edge(sources[a as usize], sources[b as usize])) {
+        Some(&n) if n >= 2 => EdgeKind::None,
+        _ => EdgeKind::Sharp,
+    };
     let border_kinds = borders
         .iter()
         .map(|ring| {
             (0..ring.len())
-                .map(|k| {
-                    let [a, b] = [ring[k], ring[(k + 1) % ring.len()]].map(|v| sources[v as usize]);
-                    match uses.get(&edge(a, b)) {
-                        Some(&n) if n >= 2 => EdgeKind::None,
-                        _ => EdgeKind::Sharp,
-                    }
-                })
+                .map(|k| kind(ring[k], ring[(k + 1) % ring.len()]))
                 .collect()
         })
         .collect();
+    // Split vertices: each position's first vertex, and the loops of the merged surface.
+    let mut first: IntMap<u32, u32> = IntMap::default();
+    let mut position_of: Vec<u32> = (sources.iter().enumerate())
+        .map(|(v, &s)| *first.entry(mesh.position_id(s)).or_insert(v as u32))
+        .collect();
+    let (mut outline, mut outline_kinds) = (Vec::new(), Vec::new());
+    if position_of.iter().enumerate().all(|(v, &r)| r == v as u32) {
+        position_of.clear();
+    } else {
+        let merged: Vec<[u32; 3]> = (tris.iter())
+            .map(|t| t.map(|v| position_of[v as usize]))
+            .collect();
+        // Each merged border edge's own vertices (the triangle's that has it).
+        let mut own: IntMap<(u32, u32), (u32, u32)> = IntMap::default();
+        for (t, m) in tris.iter().zip(&merged) {
+            for k in 0..3 {
+                own.insert((m[k], m[(k + 1) % 3]), (t[k], t[(k + 1) % 3]));
+            }
+        }
+        for ring in border_loops(&merged) {
+            let n = ring.len();
+            let edges: Vec<(u32, u32)> = (0..n)
+                .map(|k| {
+                    let e = (ring[k], ring[(k + 1) % n]);
+                    // An open chain closed where it ends: no triangle has its closing edge.
+                    own.get(&e).copied().unwrap_or(e)
+                })
+                .collect();
+            outline_kinds.push(edges.iter().map(|&(a, b)| kind(a, b)).collect());
+            outline.push(edges.iter().map(|&(a, _)| a).collect());
+        }
+    }
     let normals = sources
         .iter()
         .map(|&v| normals.get(v as usize).copied().unwrap_or(Vec3::ZERO))
@@ -290,6 +333,9 @@ pub(crate) fn extract(
         triangles: tris,
         borders,
         border_kinds,
+        position_of,
+        outline,
+        outline_kinds,
         source_triangles: triangles.to_vec(),
         source_vertices: sources,
         hierarchy: Default::default(),

@@ -119,11 +119,13 @@ impl MtHierarchy {
     /// Builds the hierarchy of a patch (`positions`, `triangles`), collapsing until no valid
     /// collapse is left.
     pub fn build(positions: &[Vec3], triangles: &[[u32; 3]]) -> MtHierarchy {
-        Builder::new(positions, triangles).run()
+        Builder::new(positions, triangles, None).run()
     }
 }
 
 struct Builder {
+    /// Split vertices (`None`: every vertex at its own position).
+    split: Option<Split>,
     pos: Vec<DVec3>,
     tris: Vec<[u32; 3]>,
     created_by: Vec<u32>,
@@ -205,9 +207,35 @@ struct Builder {
 }
 
 impl Builder {
-    fn new(positions: &[Vec3], triangles: &[[u32; 3]]) -> Builder {
+    fn new(positions: &[Vec3], triangles: &[[u32; 3]], wedges: Option<Wedges>) -> Builder {
         let pos: Vec<DVec3> = positions.iter().map(|p| p.as_dvec3()).collect();
         let n = pos.len();
+        // Split vertices, if any: the topology below is that of the positions.
+        let split = wedges
+            .filter(|w| w.rep.iter().enumerate().any(|(v, &r)| r != v as u32))
+            .map(|w| {
+                let mut at = vec![Vec::new(); n];
+                for (v, &r) in w.rep.iter().enumerate() {
+                    at[r as usize].push(v as u32);
+                }
+                Split {
+                    tris: triangles.to_vec(),
+                    target: (0..n as u32).collect(),
+                    rep: w.rep,
+                    normals: w.normals,
+                    at,
+                }
+            });
+        let merged: Vec<[u32; 3]>;
+        let triangles = match &split {
+            Some(s) => {
+                merged = (triangles.iter())
+                    .map(|t| t.map(|v| s.rep[v as usize]))
+                    .collect();
+                &merged[..]
+            }
+            None => triangles,
+        };
         let mut around = vec![Vec::new(); n];
         let mut quadric = vec![Quadric::default(); n];
         let mut edge_uses: IntMap<(u32, u32), u32> = IntMap::default();
@@ -273,6 +301,7 @@ impl Builder {
             .collect();
         let spheres: Vec<(DVec3, f64)> = corners.iter().map(bound::sphere).collect();
         Builder {
+            split,
             surface: SurfaceBvh::new(&corners),
             pieces: corners.clone(),
             piece_depth: vec![0; m],
@@ -449,6 +478,15 @@ impl Builder {
         if common != shared {
             return false;
         }
+        // Split vertices at `from` go onto those at `to` one way each.
+        if let Some(split) = &self.split {
+            let around = &self.around[f];
+            for &w in &split.at[f] {
+                if split.target_of(w, to, around, &self.tris).is_none() {
+                    return false;
+                }
+            }
+        }
         // No triangle may flip or degenerate.
         for &tr in &self.around[f] {
             let tri = self.tris[tr as usize];
@@ -558,13 +596,24 @@ impl Builder {
                 }
             }
         }
+        // With split vertices, the triangles' own vertices, each removed with its position.
+        let (triangles, vertex_removed_by, vertex_target) = match self.split {
+            Some(split) => (
+                split.tris,
+                (split.rep.iter())
+                    .map(|&r| self.vertex_removed_by[r as usize])
+                    .collect(),
+                split.target,
+            ),
+            None => (self.tris, self.vertex_removed_by, self.vertex_target),
+        };
         let mut h = MtHierarchy {
-            triangles: self.tris,
+            triangles,
             created_by: self.created_by,
             removed_by: self.removed_by,
             node_error: self.node_error,
-            vertex_removed_by: self.vertex_removed_by,
-            vertex_target: self.vertex_target,
+            vertex_removed_by,
+            vertex_target,
             ..Default::default()
         };
         h.layout();
@@ -642,6 +691,14 @@ impl Builder {
         removed.clone_from(&self.around[from as usize]);
         self.vertex_removed_by[from as usize] = node;
         self.vertex_target[from as usize] = to;
+        if let Some(split) = &mut self.split {
+            for i in 0..split.at[from as usize].len() {
+                let w = split.at[from as usize][i];
+                // `allowed` checked that every vertex has its one target.
+                let target = split.target_of(w, to, &removed, &self.tris).unwrap_or(to);
+                split.target[w as usize] = target;
+            }
+        }
         let mut region = std::mem::take(&mut self.scratch_region);
         region.clear();
         let mut inherited = 0.0f64;
@@ -665,6 +722,14 @@ impl Builder {
                 continue;
             }
             let new = tri.map(|i| if i == from { to } else { i });
+            if let Some(split) = &mut self.split {
+                let own = split.tris[t as usize];
+                let moved = std::array::from_fn(|k| match tri[k] == from {
+                    true => split.target[own[k] as usize],
+                    false => own[k],
+                });
+                split.tris.push(moved);
+            }
             let id = self.tris.len() as u32;
             self.tris.push(new);
             let corners = new.map(|i| self.pos[i as usize]);
@@ -708,6 +773,9 @@ impl Builder {
 }
 
 mod measure;
+mod split;
+
+use split::{Split, Wedges};
 
 #[cfg(test)]
 mod tests;

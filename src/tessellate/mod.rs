@@ -368,8 +368,22 @@ fn mesh_patch(
             out.triangles
                 .extend_from_slice(&h.triangles[first as usize..(first + count) as usize]);
         }
-        h.cut_borders(state, &m.borders, &mut out.borders);
-        cut_border_kinds(h, state, m, &mut out.border_kinds);
+        // Built across creases, the cut's borders are the outline's; its creases are drawn
+        // as edges of their own.
+        let (rings, kinds) = match m.position_of.is_empty() {
+            true => (&m.borders, &m.border_kinds),
+            false => (&m.outline, &m.outline_kinds),
+        };
+        h.cut_borders(state, rings, &mut out.borders);
+        cut_border_kinds(h, state, rings, kinds, &mut out.border_kinds);
+        if !m.position_of.is_empty() {
+            crease_edges(
+                &out.triangles,
+                &m.position_of,
+                &mut out.borders,
+                &mut out.border_kinds,
+            );
+        }
         out.arcs = Some(CutRanges {
             patch: m.clone(),
             ranges,
@@ -414,11 +428,12 @@ pub(crate) fn dedup_ring(
 fn cut_border_kinds(
     h: &crate::mt::MtHierarchy,
     state: &CutState,
-    m: &crate::model::mesh::MeshPatch,
+    rings: &[Vec<u32>],
+    ring_kinds: &[Vec<EdgeKind>],
     out: &mut Vec<Vec<EdgeKind>>,
 ) {
     out.clear();
-    for (ring, kinds) in m.borders.iter().zip(&m.border_kinds) {
+    for (ring, kinds) in rings.iter().zip(ring_kinds) {
         let n = ring.len();
         let alive: Vec<usize> = (0..n).filter(|&k| h.vertex_alive(state, ring[k])).collect();
         if alive.len() < 2 {
@@ -440,6 +455,39 @@ fn cut_border_kinds(
                 })
                 .collect(),
         );
+    }
+}
+
+/// The creases of a cut built across them (`MtHierarchy::build_across_seams`): each edge
+/// whose two triangles have different vertices at one of its ends (`position_of`: the first
+/// vertex at each vertex's position), appended to `borders` as a loop of its two ends, both
+/// segments sharp: drawn once per side, as the two border loops of a crease inside a patch
+/// were, with a fat border (not needed: the cut is one surface across it).
+fn crease_edges(
+    triangles: &[[u32; 3]],
+    position_of: &[u32],
+    borders: &mut Vec<Vec<u32>>,
+    kinds: &mut Vec<Vec<EdgeKind>>,
+) {
+    let at = |v: u32| position_of.get(v as usize).copied().unwrap_or(v);
+    let mut first: crate::util::IntMap<(u32, u32), (u32, u32)> = Default::default();
+    for t in triangles {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            let key = (at(a).min(at(b)), at(a).max(at(b)));
+            // The vertices at the key's ends, in the key's order.
+            let own = if at(a) <= at(b) { (a, b) } else { (b, a) };
+            match first.remove(&key) {
+                None => {
+                    first.insert(key, own);
+                }
+                Some(other) if other != own => {
+                    borders.push(vec![own.0, own.1]);
+                    kinds.push(vec![EdgeKind::Sharp; 2]);
+                }
+                Some(_) => {}
+            }
+        }
     }
 }
 

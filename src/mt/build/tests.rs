@@ -278,7 +278,7 @@ fn no_valid_collapse_is_left_at_the_coarsest_level() {
             coarse.len(),
             triangles.len()
         );
-        let mut b = Builder::new(positions, &coarse);
+        let mut b = Builder::new(positions, &coarse, None);
         let mut around = Vec::new();
         for v in 0..positions.len() as u32 {
             around.clear();
@@ -461,5 +461,95 @@ fn spikes_between_samples_stay_within_the_certified_error() {
                 dense / eps
             );
         }
+    }
+}
+
+/// `bumpy(n)` flat-shaded: every triangle with vertices of its own (at the shared positions)
+/// and its face normal, as a file with per-face normals is welded (`model::creases`).
+fn flat_shaded(n: u32) -> (Vec<glam::Vec3>, Vec<glam::Vec3>, Vec<[u32; 3]>) {
+    let m = bumpy(n);
+    let (mut positions, mut normals, mut triangles) = (Vec::new(), Vec::new(), Vec::new());
+    for t in &m.triangles {
+        let [a, b, c] = t.map(|i| m.positions[i as usize]);
+        let normal = (b - a).cross(c - a).normalize();
+        let first = positions.len() as u32;
+        positions.extend([a, b, c]);
+        normals.extend([normal; 3]);
+        triangles.push([first, first + 1, first + 2]);
+    }
+    (positions, normals, triangles)
+}
+
+#[test]
+fn a_flat_shaded_surface_simplifies_across_its_creases() {
+    let n = 12;
+    let (positions, normals, triangles) = flat_shaded(n);
+    let smooth = bumpy(n);
+    let unsplit = MtHierarchy::build(&smooth.positions, &smooth.triangles);
+    // With creases as borders, every triangle is an island: nothing simplifies.
+    let islands = MtHierarchy::build(&positions, &triangles);
+    assert_eq!(drawn(&positions, &triangles, 1.0), triangles.len());
+    assert_eq!(islands.node_count(), 1);
+    let h = MtHierarchy::build_across_seams(&positions, &normals, &triangles);
+    let merged: Vec<DVec3> = positions.iter().map(|p| p.as_dvec3()).collect();
+    // Each vertex's first vertex at its position (flat_shaded copies positions exactly).
+    let first = |v: u32| {
+        let p = positions[v as usize];
+        positions.iter().position(|&q| q == p).unwrap_or(0) as u32
+    };
+    let original: Vec<[u32; 3]> = triangles.iter().map(|t| t.map(first)).collect();
+    let mut cut = Vec::new();
+    let mut unsplit_cut = Vec::new();
+    for rel in [0.002, 0.01, 0.05] {
+        let eps = rel * 3.0;
+        let achieved = h.cut(eps, &mut cut);
+        assert!(achieved <= eps);
+        // As small as the smooth surface's cut: the creases cost nothing.
+        unsplit.cut(eps, &mut unsplit_cut);
+        assert!(
+            cut.len() <= unsplit_cut.len() + unsplit_cut.len() / 10 + 2,
+            "ε {eps}: {} triangles against {} without creases",
+            cut.len(),
+            unsplit_cut.len()
+        );
+        // One surface at the positions: a triangulation within ε of the original.
+        let at_positions: Vec<[u32; 3]> = cut.iter().map(|t| t.map(first)).collect();
+        let uses = edges_used(&at_positions);
+        assert!(uses.values().all(|&u| u <= 2), "overlap at ε {eps}");
+        assert_eq!(border_loops(&at_positions).len(), 1, "holes at ε {eps}");
+        let d = dense_hausdorff(&merged, &at_positions, &original, 6);
+        assert!(d <= eps * (1.0 + 1e-9), "ε {eps}: dense distance {d}");
+        // Every corner keeps a normal of its position, its own triangle's where it can: the
+        // normals of a cut triangle lie within the crease angle of its face.
+        for t in &cut {
+            let [a, b, c] = t.map(|i| positions[i as usize]);
+            let face = (b - a).cross(c - a).normalize();
+            for &v in t {
+                assert!(
+                    normals[v as usize].dot(face) > 0.9,
+                    "ε {eps}: corner {v} turned"
+                );
+            }
+        }
+    }
+    // The cut after every prefix of the order is the original triangles with each removed
+    // vertex replaced along its targets, with no triangle of zero area left over: what
+    // multiresolution strips substitute (`strips::mts`).
+    for applied in 1..=h.order.len() {
+        let mut expected: Vec<[u32; 3]> = (0..h.triangles.len())
+            .filter(|&t| {
+                let created = h.rank_of(h.created_by[t]) < applied;
+                let removed = h.removed_by[t];
+                created && (removed == NEVER || h.rank_of(removed) >= applied)
+            })
+            .map(|t| h.triangles[t])
+            .collect();
+        let mut substituted: Vec<[u32; 3]> = (triangles.iter())
+            .map(|t| t.map(|v| h.vertex_at(v, applied)))
+            .filter(|t| t[0] != t[1] && t[1] != t[2] && t[2] != t[0])
+            .collect();
+        expected.sort_unstable();
+        substituted.sort_unstable();
+        assert_eq!(substituted, expected, "after {applied} nodes");
     }
 }
