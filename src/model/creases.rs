@@ -5,12 +5,14 @@
 //! distinct normal (a *wedge*, Hoppe's term in "Progressive meshes", SIGGRAPH 1996 §3).
 //!
 //! Splitting vertices rather than keeping normals per triangle corner keeps one index buffer
-//! per patch and lets the MT hierarchies ([`crate::mt`]) run unchanged: a crease becomes a
-//! border inside its patch, along which half-edge collapses move only along the crease (the
-//! border rule), so coarser cuts keep the crease and keep a subset of the original vertices
-//! with their original normals — nothing is averaged. Where the two sides of a crease are
-//! simplified differently, the fat borders drawn along every border loop cover the gap, as
-//! they cover the gaps between patches (Balázs et al. 2004 §3).
+//! per patch. The MT hierarchies are built across the split
+//! ([`crate::mt::MtHierarchy::build_across_seams`]): each position is one vertex of the
+//! surface being simplified, so a crease is not a border (a region between creases, a step's
+//! wall, can vanish once the error allows), and each collapse moves every vertex at the removed
+//! position onto one at the target, so coarser cuts keep the original vertices with their
+//! original normals — nothing is averaged. The original triangles (the crack check's
+//! reference) keep each crease as two border loops, covered by fat borders as the gaps between
+//! patches are (Balázs et al. 2004 §3).
 //!
 //! What it does not do: normals are not re-oriented (a face wound against its neighbours has
 //! a normal beyond the crease angle from theirs, so their shared edge shades hard; lighting

@@ -23,8 +23,9 @@
 //! whose creator's error is ≤ ε and whose remover's is > ε: the nodes with error ≤ ε form a
 //! closed set (monotonicity), so the cut is a valid triangulation of the patch within ε of the
 //! original, two-sided. Patch borders collapse along themselves, corners too (the node error
-//! measures what that costs); the gaps to neighbouring patches are covered by fat borders like
-//! those of independently tessellated surfaces.
+//! measures what that costs); creases, where a patch's vertices are split by their normals,
+//! are no border (`build_across_seams`); the gaps to neighbouring patches are covered by fat
+//! borders like those of independently tessellated surfaces.
 //!
 //! The algorithms live in their own modules: `build` (half-edge collapses by quadric error,
 //! Hausdorff node errors), `bound` (the certified distance bounds they use), `reduce` (Holst §4: arc collapse and the error adjustment) and
