@@ -38,8 +38,9 @@ use crate::mt::{MtHierarchy, MtParts};
 /// originals grown across the prism: other (tighter) errors. 10: pieces of the original
 /// surface split up to 8 times, not 3 (`mt::build::PIECE_DEPTH`): other (tighter) errors on
 /// flat regions. 11: hierarchies built across creases (`MtHierarchy::build_across_seams`):
-/// other hierarchies wherever vertices are split by their normals.
-pub(crate) const FORMAT_VERSION: u32 = 11;
+/// other hierarchies wherever vertices are split by their normals. 12: an interior vertex may
+/// move onto the border along a crease: other hierarchies where a crease meets the outline.
+pub(crate) const FORMAT_VERSION: u32 = 12;
 
 const MAGIC: &[u8; 8] = b"PWMTCACH";
 const HEADER: usize = 8 + 4 + 16 + 8 + 16;

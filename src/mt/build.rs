@@ -414,8 +414,15 @@ impl Builder {
         {
             return None;
         }
-        // An interior vertex may not move onto the border (it would pinch the patch).
-        if self.border[f].is_none() && self.border[t].is_some() {
+        // An interior vertex may not move onto the border (it would pinch the patch), except
+        // along a crease: there the vertices on either side were borders of their own until
+        // the build went across creases, each free to slide along the crease onto the
+        // patch border (a block's edge ending at its outline, `models/alien.glb`).
+        if self.border[f].is_none()
+            && self.border[t].is_some()
+            && !(self.split.as_ref())
+                .is_some_and(|s| s.crease_edge(from, to, &self.around[f], &self.tris))
+        {
             return None;
         }
         let mut q = self.quadric[f];
