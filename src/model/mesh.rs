@@ -202,6 +202,7 @@ impl MeshPatch {
     pub fn build_hierarchy(&mut self, arc_size: f64) {
         self.hierarchy = crate::mt::MtHierarchy::build_across_seams(
             &self.positions,
+            &self.position_of,
             &self.normals,
             &self.triangles,
         );

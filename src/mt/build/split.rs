@@ -8,11 +8,11 @@
 use glam::Vec3;
 
 use super::{Builder, MtHierarchy};
-use crate::util::IntMap;
 
 impl MtHierarchy {
-    /// [`MtHierarchy::build`] across seams: vertices at bit-identical positions (a position
-    /// split by its normals, `model::creases`) are one vertex of the surface being simplified,
+    /// [`MtHierarchy::build`] across seams: the vertices at one position (`position_of`: per
+    /// vertex, the first vertex at its position, as `model::mesh::MeshPatch::position_of`
+    /// has it; empty when no vertex is split) are one vertex of the surface being simplified,
     /// so a crease is not a border and may be collapsed along and across like any edge, the
     /// node errors (geometric) saying what that costs. The hierarchy's triangles still index
     /// the split vertices: a collapse moves each vertex at the removed position onto the
@@ -21,21 +21,15 @@ impl MtHierarchy {
     /// triangle keeps the normals of its side of the crease.
     pub fn build_across_seams(
         positions: &[Vec3],
+        position_of: &[u32],
         normals: &[Vec3],
         triangles: &[[u32; 3]],
     ) -> MtHierarchy {
-        let mut first: IntMap<[u32; 3], u32> = IntMap::default();
-        let rep: Vec<u32> = (positions.iter().enumerate())
-            .map(|(v, p)| {
-                let key = [p.x + 0.0, p.y + 0.0, p.z + 0.0].map(f32::to_bits);
-                *first.entry(key).or_insert(v as u32)
-            })
-            .collect();
-        let wedges = Wedges {
-            rep,
+        let wedges = (position_of.len() == positions.len()).then(|| Wedges {
+            rep: position_of.to_vec(),
             normals: normals.to_vec(),
-        };
-        Builder::new(positions, triangles, Some(wedges)).run()
+        });
+        Builder::new(positions, triangles, wedges).run()
     }
 }
 

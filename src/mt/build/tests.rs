@@ -490,13 +490,14 @@ fn a_flat_shaded_surface_simplifies_across_its_creases() {
     let islands = MtHierarchy::build(&positions, &triangles);
     assert_eq!(drawn(&positions, &triangles, 1.0), triangles.len());
     assert_eq!(islands.node_count(), 1);
-    let h = MtHierarchy::build_across_seams(&positions, &normals, &triangles);
-    let merged: Vec<DVec3> = positions.iter().map(|p| p.as_dvec3()).collect();
     // Each vertex's first vertex at its position (flat_shaded copies positions exactly).
     let first = |v: u32| {
         let p = positions[v as usize];
         positions.iter().position(|&q| q == p).unwrap_or(0) as u32
     };
+    let position_of: Vec<u32> = (0..positions.len() as u32).map(first).collect();
+    let h = MtHierarchy::build_across_seams(&positions, &position_of, &normals, &triangles);
+    let merged: Vec<DVec3> = positions.iter().map(|p| p.as_dvec3()).collect();
     let original: Vec<[u32; 3]> = triangles.iter().map(|t| t.map(first)).collect();
     let mut cut = Vec::new();
     let mut unsplit_cut = Vec::new();
