@@ -17,44 +17,13 @@
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
-use glam::{DMat4, DVec3, DVec4, Vec3};
+use glam::{DVec3, Vec3};
 
 use super::bound::{self, Piece};
 use super::nearest::SurfaceBvh;
 use super::{MtHierarchy, NEVER};
 use crate::geom::point_triangle_distance;
 use crate::util::IntMap;
-
-/// A symmetric 4×4 quadric.
-#[derive(Clone, Copy, Debug)]
-struct Quadric(DMat4);
-
-impl Default for Quadric {
-    /// The zero quadric (no plane). Not `DMat4::default()`, which is glam's identity: every
-    /// vertex then cost 1 + |p|² more, and collapses were ordered by the distance of their
-    /// vertices from the origin rather than by their error.
-    fn default() -> Quadric {
-        Quadric(DMat4::ZERO)
-    }
-}
-
-impl Quadric {
-    fn plane(n: DVec3, p: DVec3, weight: f64) -> Quadric {
-        let v = DVec4::new(n.x, n.y, n.z, -n.dot(p));
-        Quadric(DMat4::from_cols(v * v.x, v * v.y, v * v.z, v * v.w) * weight)
-    }
-    fn eval(&self, p: DVec3) -> f64 {
-        let v = p.extend(1.0);
-        v.dot(self.0 * v).max(0.0)
-    }
-    fn add(&mut self, o: &Quadric) {
-        self.0 += o.0;
-    }
-    /// Total weight of its planes (their normals are unit: the trace of the 3×3 part).
-    fn weight(&self) -> f64 {
-        self.0.x_axis.x + self.0.y_axis.y + self.0.z_axis.z
-    }
-}
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Candidate {
@@ -780,7 +749,10 @@ impl Builder {
 }
 
 mod measure;
+mod quadric;
 mod split;
+
+use quadric::Quadric;
 
 use split::{Split, Wedges};
 
