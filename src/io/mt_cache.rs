@@ -40,7 +40,9 @@ use crate::mt::{MtHierarchy, MtParts};
 /// flat regions. 11: hierarchies built across creases (`MtHierarchy::build_across_seams`):
 /// other hierarchies wherever vertices are split by their normals. 12: an interior vertex may
 /// move onto the border along a crease: other hierarchies where a crease meets the outline.
-pub(crate) const FORMAT_VERSION: u32 = 12;
+/// 13: split pieces merged back and pieces kept by the triangle they moved with
+/// (`mt::build::measure`): other errors and hierarchies.
+pub(crate) const FORMAT_VERSION: u32 = 13;
 
 const MAGIC: &[u8; 8] = b"PWMTCACH";
 const HEADER: usize = 8 + 4 + 16 + 8 + 16;

@@ -111,6 +111,13 @@ struct Builder {
     piece_depth: Vec<u8>,
     /// The original triangle each piece is part of.
     piece_origin: Vec<u32>,
+    /// The piece each was split from ([`NEVER`]: an original triangle), and the parts of
+    /// each piece's latest split (first id, count: consecutive ids).
+    piece_parent: Vec<u32>,
+    piece_parts: Vec<(u32, u32)>,
+    /// Per piece: `piece_generation` while it is in the cover [`Builder::coalesce`] merges.
+    piece_mark: Vec<u32>,
+    piece_generation: u32,
     /// Each piece's corners as ids of `points`: the original vertices first, then the corners
     /// splits made (`point_ids`: by their bits, so parts sharing a corner share its id).
     piece_points: Vec<[u32; 3]>,
@@ -149,6 +156,8 @@ struct Builder {
     scratch_removed: Vec<u32>,
     scratch_fan: Vec<u32>,
     scratch_region: Vec<u32>,
+    /// Per piece of the region, the fan triangle (index) its removed triangle became.
+    scratch_own: Vec<u32>,
     scratch_assigned: Vec<(u32, u32, f64)>,
     scratch_pieces: Vec<(u32, u32)>,
     scratch_parts: Vec<Piece>,
@@ -275,6 +284,10 @@ impl Builder {
             pieces: corners.clone(),
             piece_depth: vec![0; m],
             piece_origin: (0..m as u32).collect(),
+            piece_parent: vec![NEVER; m],
+            piece_parts: vec![(0, 0); m],
+            piece_mark: vec![0; m],
+            piece_generation: 0,
             piece_points: triangles.to_vec(),
             point_ids: pos
                 .iter()
@@ -310,6 +323,7 @@ impl Builder {
             scratch_removed: Vec::new(),
             scratch_fan: Vec::new(),
             scratch_region: Vec::new(),
+            scratch_own: Vec::new(),
             scratch_assigned: Vec::new(),
             scratch_pieces: Vec::new(),
             scratch_parts: Vec::new(),
@@ -677,10 +691,22 @@ impl Builder {
         }
         let mut region = std::mem::take(&mut self.scratch_region);
         region.clear();
+        let mut own = std::mem::take(&mut self.scratch_own);
+        own.clear();
         let mut inherited = 0.0f64;
+        let mut next = 0;
         for &t in &removed {
             self.removed_by[t as usize] = node;
             inherited = inherited.max(self.node_error[self.created_by[t as usize] as usize]);
+            // The fan triangle `t` becomes (fans are made in the order of `removed`).
+            let k = match self.tris[t as usize].contains(&to) {
+                true => NEVER,
+                false => {
+                    next += 1;
+                    next - 1
+                }
+            };
+            own.extend(self.covers[t as usize].iter().map(|_| k));
             region.append(&mut self.covers[t as usize]);
             // The emptied list keeps its capacity for a triangle of the fan.
             let emptied = std::mem::take(&mut self.covers[t as usize]);
@@ -740,8 +766,11 @@ impl Builder {
                 }
             }
         }
-        let error = self.measure(&fan, &region, inherited);
+        let error = self.measure(&fan, &region, &own, inherited);
+        self.scratch_own = own;
         self.node_error.push(error.max(inherited));
+        #[cfg(test)]
+        self.check_covers(&fan);
         self.scratch_removed = removed;
         self.scratch_region = region;
         self.scratch_fan = fan;

@@ -557,10 +557,22 @@ mod tests {
 
     #[test]
     fn arc_collapse_reaches_the_target_size_and_keeps_cuts_valid() {
-        let m = bumpy(12);
+        // 16 × 16: at 12 × 12 the hierarchy has a dozen nodes left at 20 triangles per arc,
+        // and whether the last merges are allowed hangs on the order of the few collapses
+        // near its root (16.1 per arc once the build merged its pieces back, 20.0 before).
+        let m = bumpy(16);
         let fine = MtHierarchy::build(&m.positions, &m.triangles);
         assert!(fine.mean_arc_size() < 3.0, "{}", fine.mean_arc_size());
         let pos: Vec<DVec3> = m.positions.iter().map(|p| p.as_dvec3()).collect();
+        let area_of = |tris: &[[u32; 3]]| -> f64 {
+            (tris.iter())
+                .map(|t| {
+                    let [a, b, c] = t.map(|i| pos[i as usize]);
+                    0.5 * (b - a).cross(c - a).z.abs()
+                })
+                .sum()
+        };
+        let full = area_of(&m.triangles);
         for target in [2.0, 5.0, 10.0, 20.0] {
             let mut h = fine.clone();
             let collapses = h.reduce(target);
@@ -592,16 +604,10 @@ mod tests {
                     "{target}: overlap at ε {eps}"
                 );
                 assert_eq!(border_loops(&cut).len(), 1, "{target}: holes at ε {eps}");
-                let area: f64 = cut
-                    .iter()
-                    .map(|t| {
-                        let [a, b, c] = t.map(|i| pos[i as usize]);
-                        0.5 * (b - a).cross(c - a).z.abs()
-                    })
-                    .sum();
+                let area = area_of(&cut);
                 // Up to what cutting the square's corners within ε removes.
                 assert!(
-                    (area - 9.0).abs() < 0.02 + eps * 12.0,
+                    (area - full).abs() < 0.02 + eps * 4.0 * full.sqrt(),
                     "{target}: area {area} at ε {eps}"
                 );
                 let worst = sampled_hausdorff(&pos, &cut, &m.triangles);

@@ -17,9 +17,13 @@ impl Builder {
     }
 
     /// A new piece of the original surface, `depth` splits below an original triangle.
-    fn add_piece(&mut self, piece: Piece, depth: u8, origin: u32) -> u32 {
+    fn add_piece(&mut self, piece: Piece, depth: u8, parent: u32) -> u32 {
         let id = self.pieces.len() as u32;
+        let origin = self.piece_origin[parent as usize];
         self.pieces.push(piece);
+        self.piece_parent.push(parent);
+        self.piece_parts.push((0, 0));
+        self.piece_mark.push(0);
         let ids = piece.map(|p| self.point_id(p));
         self.piece_points.push(ids);
         self.piece_depth.push(depth);
@@ -45,11 +49,15 @@ impl Builder {
     /// (see [`bound`] for the facts it rests on).
     ///
     /// - **Original → fan**, against one triangle: every piece of the original surface in
-    ///   `region` is given to the fan triangle whose farthest point from it is nearest
-    ///   (exact at its corners: convexity) and stays in its cover until that
-    ///   triangle is removed, so every cut holding the triangle holds the bound. A piece
-    ///   whose bound is loose is split along the side of its triangle that it overhangs
-    ///   (kept split, at most [`PIECE_DEPTH`] times).
+    ///   `region` (`own[i]`: the index in `fan` of the triangle that the one covering
+    ///   `region[i]` became, or [`NEVER`]) stays with that triangle when its farthest point
+    ///   (exact at its corners: convexity) is within the floor, `inherited` and the sampled
+    ///   distances of the fan ([`Builder::sample_lower`]); any other is given to the fan
+    ///   triangle whose farthest point from it is nearest. It stays in that triangle's cover
+    ///   until the triangle is removed, so every cut holding the triangle holds the bound. A
+    ///   piece whose bound is loose is split along the side of its triangle that it overhangs
+    ///   (at most [`PIECE_DEPTH`] times), and merged back when its parts come together in one
+    ///   cover ([`Builder::coalesce`]).
     /// - **Fan → original**: a fan triangle that the original surface around it covers without
     ///   folding is bounded by its height over it ([`Builder::height_bound`]); any other, against
     ///   the patch's whole original surface (a box hierarchy, [`super::super::nearest`]), by the
@@ -63,7 +71,13 @@ impl Builder {
     /// measure), which no bound of this collapse can be below. Slack over `inherited` would
     /// compound up the DAG. What is returned is never below the true distance, and above
     /// `max(inherited, (1 + SLACK) · lower)` only where a depth limit stopped.
-    pub(super) fn measure(&mut self, fan: &[u32], region: &[u32], inherited: f64) -> f64 {
+    pub(super) fn measure(
+        &mut self,
+        fan: &[u32],
+        region: &[u32],
+        own: &[u32],
+        inherited: f64,
+    ) -> f64 {
         let mut assigned = std::mem::take(&mut self.scratch_assigned);
         assigned.clear();
         // A new collapse: no corner's distances to this fan are known yet.
@@ -73,14 +87,22 @@ impl Builder {
             self.point_generation = 1;
         }
         self.fan_dist.clear();
-        let mut lower = 0.0f64;
-        for &o in region {
+        let mut lower = self.sample_lower(fan, 0.0);
+        let floor = lower.max(inherited);
+        for (&o, &k) in region.iter().zip(own) {
+            // A piece within the floor of the triangle it was given to, as that triangle
+            // moved: kept there, the other fan triangles unmeasured.
+            if k != NEVER {
+                let bound = self.bound_against(fan, o, k as usize);
+                if bound <= floor {
+                    assigned.push((o, fan[k as usize], bound));
+                    continue;
+                }
+            }
             let (at, bound, near) = self.nearest_fan_triangle(fan, o);
             lower = lower.max(near);
-            self.covers[at as usize].push(o);
             assigned.push((o, at, bound));
         }
-        lower = self.sample_lower(fan, lower);
         // `lower`: distances measured at points (no bound of this collapse is below them);
         // `worst`: the bound so far. A bound within `limit` is taken as it is; slack is allowed
         // over the collapse's own distances only, not over the inherited error (it would
@@ -89,9 +111,6 @@ impl Builder {
         let mut worst = lower.max(inherited);
         let limit = |worst: f64, lower: f64| worst.max(lower * (1.0 + SLACK));
         // Original → fan: the loose pieces split, the rest kept where assigned.
-        for &t in fan {
-            self.covers[t as usize].clear();
-        }
         let mut stack = std::mem::take(&mut self.scratch_pieces);
         stack.clear();
         for &(o, at, bound) in &assigned {
@@ -109,8 +128,9 @@ impl Builder {
             let tri = self.corners[at as usize];
             bound::split(&piece, Some(&tri), &mut parts);
             let depth = self.piece_depth[o as usize] + 1;
+            self.piece_parts[o as usize] = (self.pieces.len() as u32, parts.len() as u32);
             for &part in &parts {
-                let id = self.add_piece(part, depth, self.piece_origin[o as usize]);
+                let id = self.add_piece(part, depth, o);
                 let (at, bound, near) = self.nearest_fan_triangle(fan, id);
                 lower = lower.max(near);
                 worst = worst.max(near);
@@ -122,15 +142,24 @@ impl Builder {
                 }
             }
         }
+        for &t in fan {
+            self.coalesce(t);
+        }
         // Fan → original.
         let mut todo = std::mem::take(&mut self.scratch_fan_pieces);
         for &t in fan {
-            if let Some(bound) = self.height_bound(t)
+            let height = self.height_bound(t);
+            if let Some(bound) = height
                 && bound <= limit(worst, lower)
             {
                 worst = worst.max(bound);
                 continue;
             }
+            // A loose height bound still caps what splitting is worth: once a part is
+            // bounded no tighter (past the depth limit or within the slack), the height bound
+            // is taken for the whole triangle instead.
+            let cap = height.unwrap_or(f64::INFINITY);
+            let before = worst;
             todo.clear();
             todo.push((
                 self.corners[t as usize],
@@ -147,7 +176,10 @@ impl Builder {
                     continue;
                 }
                 if bound <= limit(worst, lower) || depth >= FAN_DEPTH {
-                    worst = bound;
+                    worst = bound.min(before.max(cap));
+                    if bound >= cap {
+                        break;
+                    }
                     continue;
                 }
                 parts.clear();
@@ -161,6 +193,64 @@ impl Builder {
         self.scratch_pieces = stack;
         self.scratch_assigned = assigned;
         worst
+    }
+
+    /// The invariant the original → fan half of every node error rests on, checked after each
+    /// collapse in tests: every piece in the cover of a fan triangle is within the node's
+    /// error of it (at its corners: convexity).
+    #[cfg(test)]
+    pub(super) fn check_covers(&self, fan: &[u32]) {
+        for &t in fan {
+            let error = self.node_error[self.created_by[t as usize] as usize];
+            for &o in &self.covers[t as usize] {
+                let far = (self.pieces[o as usize].iter())
+                    .map(|&p| self.dist(p, t))
+                    .fold(0.0, f64::max);
+                assert!(
+                    far <= error,
+                    "piece {o} is {far} from triangle {t}, error {error}"
+                );
+            }
+        }
+    }
+
+    /// Replaces, in the cover of fan triangle `t`, the parts of a split piece by the piece
+    /// when all of them are there (repeatedly: up to an original triangle). The piece's bound
+    /// against `t` is no looser than its parts' (the distance to a triangle is convex: its
+    /// largest over the piece is at one of the piece's corners, which are corners of parts),
+    /// so the collapse's error stands, and later collapses measure fewer pieces.
+    fn coalesce(&mut self, t: u32) {
+        self.piece_generation = self.piece_generation.wrapping_add(1);
+        if self.piece_generation == 0 {
+            self.piece_mark.fill(0);
+            self.piece_generation = 1;
+        }
+        let g = self.piece_generation;
+        let mut list = std::mem::take(&mut self.covers[t as usize]);
+        for &p in &list {
+            self.piece_mark[p as usize] = g;
+        }
+        let mut merged = false;
+        let mut i = 0;
+        while i < list.len() {
+            let q = self.piece_parent[list[i] as usize];
+            i += 1;
+            if q == NEVER || self.piece_mark[q as usize] == g {
+                continue;
+            }
+            let (first, count) = self.piece_parts[q as usize];
+            let parts = first as usize..(first + count) as usize;
+            if self.piece_mark[parts.clone()].iter().all(|&m| m == g) {
+                self.piece_mark[parts].fill(0);
+                self.piece_mark[q as usize] = g;
+                list.push(q);
+                merged = true;
+            }
+        }
+        if merged {
+            list.retain(|&p| self.piece_mark[p as usize] == g);
+        }
+        self.covers[t as usize] = list;
     }
 
     /// [`bound::height_over`] for fan triangle `t` over the original triangles of the pieces
@@ -322,13 +412,14 @@ impl Builder {
     /// distances to the fan are measured once per collapse ([`Builder::fan_distances`]); ties
     /// go to the first fan triangle.
     fn nearest_fan_triangle(&mut self, fan: &[u32], o: u32) -> (u32, f64, f64) {
-        let rows = self.piece_points[o as usize].map(|id| self.fan_distances(fan, id));
+        let ids = self.piece_points[o as usize];
+        let rows = ids.map(|id| self.fan_distances(fan, id));
         let mut corner_best = [f64::INFINITY; 3];
         let mut best = (fan[0], f64::INFINITY);
         for (i, &t) in fan.iter().enumerate() {
             let mut far = 0.0f64;
             for k in 0..3 {
-                let d = self.fan_dist[rows[k] + i];
+                let d = self.fan_distance(fan, ids[k], rows[k], i);
                 corner_best[k] = corner_best[k].min(d);
                 far = far.max(d);
             }
@@ -340,6 +431,27 @@ impl Builder {
         (best.0, best.1, near)
     }
 
+    /// The farthest distance from piece `o` to fan triangle `fan[k]` (exact: at a corner).
+    fn bound_against(&mut self, fan: &[u32], o: u32, k: usize) -> f64 {
+        let mut far = 0.0f64;
+        for id in self.piece_points[o as usize] {
+            let row = self.fan_distances(fan, id);
+            far = far.max(self.fan_distance(fan, id, row, k));
+        }
+        far
+    }
+
+    /// Entry `k` of a row of [`Builder::fan_distances`], measured if it is not yet.
+    fn fan_distance(&mut self, fan: &[u32], id: u32, row: usize, k: usize) -> f64 {
+        let d = self.fan_dist[row + k];
+        if !d.is_nan() {
+            return d;
+        }
+        let d = self.dist(self.points[id as usize], fan[k]);
+        self.fan_dist[row + k] = d;
+        d
+    }
+
     /// Where the distances from point `id` to the triangles of `fan` (in its order) start in
     /// `fan_dist`, measured the first time the collapse asks (`point_generation`).
     fn fan_distances(&mut self, fan: &[u32], id: u32) -> usize {
@@ -347,11 +459,7 @@ impl Builder {
         if self.point_mark[i] != self.point_generation {
             self.point_mark[i] = self.point_generation;
             self.point_slot[i] = self.fan_dist.len() as u32;
-            let p = self.points[i];
-            for &t in fan {
-                let d = self.dist(p, t);
-                self.fan_dist.push(d);
-            }
+            self.fan_dist.extend(fan.iter().map(|_| f64::NAN));
         }
         self.point_slot[i] as usize
     }
