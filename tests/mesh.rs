@@ -205,11 +205,21 @@ fn every_cut_of_the_bunny_patches_is_a_triangulation_within_its_error() {
     for p in mesh_patches(scene).into_iter().step_by(33) {
         let h = &p.hierarchy;
         // Reduced by arc collapse (within `MAX_MERGE_ERROR_RATIO`, which stops it short of the
-        // default arc size: 2.3 triangles per arc on the bunny), and still many levels.
+        // default arc size: about 2.0 triangles per arc on the bunny, 1.78 unreduced; some
+        // patches merge nothing), and still many levels. Measured against the patch's own
+        // unreduced hierarchy: an absolute 2.0 on three patches flipped with the build's
+        // collapse order (2.027 -> 1.993 on one, while the bunny's mean went 2.008 -> 2.015).
+        let unreduced = patchwork::mt::MtHierarchy::build_across_seams(
+            &p.positions,
+            &p.position_of,
+            &p.normals,
+            &p.triangles,
+        );
         assert!(
-            h.mean_arc_size() >= 2.0,
-            "{} triangles per arc",
-            h.mean_arc_size()
+            h.mean_arc_size() >= 1.05 * unreduced.mean_arc_size(),
+            "{} triangles per arc, {} unreduced",
+            h.mean_arc_size(),
+            unreduced.mean_arc_size()
         );
         assert!(
             h.node_count() > p.triangles.len() / 20,
