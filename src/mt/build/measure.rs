@@ -453,7 +453,8 @@ impl Builder {
     }
 
     /// Where the distances from point `id` to the triangles of `fan` (in its order) start in
-    /// `fan_dist`, measured the first time the collapse asks (`point_generation`).
+    /// `fan_dist`: a row made the first time the collapse asks (`point_generation`), its
+    /// entries NaN until [`Builder::fan_distance`] measures them.
     fn fan_distances(&mut self, fan: &[u32], id: u32) -> usize {
         let i = id as usize;
         if self.point_mark[i] != self.point_generation {
