@@ -159,7 +159,6 @@ impl Builder {
             // bounded no tighter (past the depth limit or within the slack), the height bound
             // is taken for the whole triangle instead.
             let cap = height.unwrap_or(f64::INFINITY);
-            let before = worst;
             todo.clear();
             todo.push((
                 self.corners[t as usize],
@@ -176,7 +175,9 @@ impl Builder {
                     continue;
                 }
                 if bound <= limit(worst, lower) || depth >= FAN_DEPTH {
-                    worst = bound.min(before.max(cap));
+                    // `cap` is above `worst` (it was loose), so it bounds this triangle and
+                    // every one before it.
+                    worst = bound.min(cap);
                     if bound >= cap {
                         break;
                     }
