@@ -490,17 +490,15 @@ impl Builder {
     /// true distance from every sample of the fan ([`samples`]) to the original surface. It
     /// tells [`Builder::measure`] which certified bounds are loose.
     fn sample_lower(&mut self, fan: &[u32], mut worst: f64) -> f64 {
-        // Corners and edges the fan triangles share are sampled once.
-        let g = self.next_generation();
+        // Edges the fan triangles share are sampled once; corners never: they are original
+        // vertices (collapses move a vertex onto another), on the surface.
         let mut edges = std::mem::take(&mut self.fan_edges);
         edges.clear();
         for &t in fan {
             let tri = self.tris[t as usize];
             let [a, b, c] = self.corners[t as usize];
-            let mut todo = [true; 7];
+            let mut todo = [false, false, false, true, true, true, true];
             for k in 0..3 {
-                todo[k] = self.mark[tri[k] as usize] != g;
-                self.mark[tri[k] as usize] = g;
                 let e = (tri[k].min(tri[(k + 1) % 3]), tri[k].max(tri[(k + 1) % 3]));
                 todo[3 + k] = !edges.contains(&e);
                 if todo[3 + k] {
