@@ -42,7 +42,7 @@ use crate::mt::{MtHierarchy, MtParts};
 /// move onto the border along a crease: other hierarchies where a crease meets the outline.
 /// 13: split pieces merged back and pieces kept by the triangle they moved with
 /// (`mt::build::measure`): other errors and hierarchies.
-pub(crate) const FORMAT_VERSION: u32 = 13;
+pub(crate) const FORMAT_VERSION: u32 = 14;
 
 const MAGIC: &[u8; 8] = b"PWMTCACH";
 const HEADER: usize = 8 + 4 + 16 + 8 + 16;

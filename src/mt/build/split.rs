@@ -54,34 +54,6 @@ pub(super) struct Split {
 }
 
 impl Split {
-    /// Whether the edge from `from` to `to` (in the builder's topology) is a crease: the
-    /// triangles `around` `from` that hold `to` give `from` different vertices of its own.
-    pub(super) fn crease_edge(
-        &self,
-        from: u32,
-        to: u32,
-        around: &[u32],
-        topo: &[[u32; 3]],
-    ) -> bool {
-        let mut seen = None;
-        for &t in around {
-            let tri = topo[t as usize];
-            let Some(j) = tri.iter().position(|&x| x == from) else {
-                continue;
-            };
-            if !tri.contains(&to) {
-                continue;
-            }
-            let own = self.tris[t as usize][j];
-            match seen {
-                None => seen = Some(own),
-                Some(o) if o != own => return true,
-                Some(_) => {}
-            }
-        }
-        false
-    }
-
     /// The vertex at `to` that vertex `w` (at the removed position) moves onto: the one the
     /// triangles `around` (those of the removed position) that hold `to` pair it with, else
     /// the one with the nearest normal, else the first; `None` when two triangles pair it

@@ -371,7 +371,10 @@ fn a_staircase_border_simplifies_within_its_error() {
 /// Arc collapse merges a node into one of larger error, which delays the finer node's
 /// triangles to a coarser ε. Merging only nodes within `MAX_MERGE_ERROR_RATIO` of each other
 /// keeps the bunny's cuts near the unreduced hierarchy's (1.4× over all its patches at 0.5 %
-/// of the diagonal); Holst's unlimited reduction to 5 triangles per arc drew 5×.
+/// of the diagonal); Holst's unlimited reduction to 5 triangles per arc drew 5×. Measured at
+/// ε = 0.005 (six patches: 720 triangles unreduced, 728 within the ratio, 4 173 unlimited):
+/// at 0.013, where this test first looked, the cuts are now near their coarsest (153 / 157 /
+/// 223) since interior vertices may move onto the border.
 #[test]
 fn reduction_within_an_error_ratio_keeps_cuts_small() {
     let patches = bunny_patches(1500);
@@ -387,7 +390,7 @@ fn reduction_within_an_error_ratio_keeps_cuts_small() {
         let mut b = h.clone();
         b.reduce(crate::mt::DEFAULT_ARC_SIZE);
         for (sum, h) in [(&mut built, &h), (&mut within, &a), (&mut unlimited, &b)] {
-            h.cut(0.013, &mut cut);
+            h.cut(0.005, &mut cut);
             *sum += cut.len();
         }
     }
@@ -552,5 +555,21 @@ fn a_flat_shaded_surface_simplifies_across_its_creases() {
         expected.sort_unstable();
         substituted.sort_unstable();
         assert_eq!(substituted, expected, "after {applied} nodes");
+    }
+}
+
+/// An interior vertex may move onto the border, as meshoptimizer's manifold vertices may: a
+/// flat square grid goes down to its two triangles at no error (seen failing while interior
+/// vertices reached the border only along creases: the last of them stayed with its fan;
+/// over the bunny's patches, 1 373 / 749 triangles at 1 / 2 % of the diagonal against
+/// 1 101 / 530 since).
+#[test]
+fn a_flat_grid_simplifies_to_its_two_triangles() {
+    for seed in [1, 2, 3] {
+        let (positions, triangles) = spiky_grid(10, 0, 0.0, seed);
+        let h = MtHierarchy::build(&positions, &triangles);
+        let mut cut = Vec::new();
+        h.cut(1e-9, &mut cut);
+        assert_eq!(cut.len(), 2, "seed {seed}: {} triangles at no error", cut.len());
     }
 }
