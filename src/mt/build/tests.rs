@@ -570,6 +570,11 @@ fn a_flat_grid_simplifies_to_its_two_triangles() {
         let h = MtHierarchy::build(&positions, &triangles);
         let mut cut = Vec::new();
         h.cut(1e-9, &mut cut);
-        assert_eq!(cut.len(), 2, "seed {seed}: {} triangles at no error", cut.len());
+        assert_eq!(
+            cut.len(),
+            2,
+            "seed {seed}: {} triangles at no error",
+            cut.len()
+        );
     }
 }
