@@ -177,10 +177,10 @@ fn a_flat_shaded_mesh_simplifies() {
 /// What building across creases first cost `models/alien.glb` (a low-poly model of boxes):
 /// a box's top is two faces meeting at a slight crease (6°) that ends on the patch's outline
 /// at both ends. With creases as borders, the crease's vertices slid along it onto the
-/// outline; built across creases they were interior vertices, which may not move onto the
-/// border, and stayed (289 of 292 triangles drawn at 1 % of the diagonal, 1.69×
-/// meshoptimizer's error at equal triangles). A vertex may now move onto the border along a
-/// crease: 281 (0.25×).
+/// outline; built across creases they were interior vertices, which could not move onto the
+/// border then, and stayed (289 of 292 triangles drawn at 1 % of the diagonal, 1.69×
+/// meshoptimizer's error at equal triangles). Once a vertex could move onto the border along
+/// a crease: 281 (0.25×); the same since any interior vertex may.
 #[test]
 fn a_crease_collapses_onto_the_patch_outline() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("models/alien.glb");
