@@ -42,6 +42,7 @@ use crate::mt::{MtHierarchy, MtParts};
 /// move onto the border along a crease: other hierarchies where a crease meets the outline.
 /// 13: split pieces merged back and pieces kept by the triangle they moved with
 /// (`mt::build::measure`): other errors and hierarchies.
+/// 14: an interior vertex may move onto the border anywhere: other hierarchies.
 pub(crate) const FORMAT_VERSION: u32 = 14;
 
 const MAGIC: &[u8; 8] = b"PWMTCACH";
