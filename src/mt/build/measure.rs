@@ -487,7 +487,8 @@ impl Builder {
     }
 
     /// Sampled lower bound of the fan → original distance: the largest of `worst` and the
-    /// true distance from every sample of the fan ([`samples`]) to the original surface. It
+    /// true distance from every sample of the fan ([`samples`]) but its corners (original
+    /// vertices: on the surface) to the original surface. It
     /// tells [`Builder::measure`] which certified bounds are loose.
     fn sample_lower(&mut self, fan: &[u32], mut worst: f64) -> f64 {
         // Edges the fan triangles share are sampled once; corners never: they are original
