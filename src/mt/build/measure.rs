@@ -148,7 +148,7 @@ impl Builder {
         // Fan → original.
         let mut todo = std::mem::take(&mut self.scratch_fan_pieces);
         for &t in fan {
-            let height = self.height_bound(t);
+            let height = self.height_bound(t, worst);
             if let Some(bound) = height
                 && bound <= limit(worst, lower)
             {
@@ -260,7 +260,8 @@ impl Builder {
     /// border edges it replaced and their triangles ([`Builder::border_chain`]), so the parts
     /// of `t` between such an edge and its chain are bounded too. Any list of originals
     /// gives a certified bound (or none): the list only decides how often one is found.
-    fn height_bound(&mut self, t: u32) -> Option<f64> {
+    /// `floor`: the node's bound so far, below which heights are taken as they are.
+    fn height_bound(&mut self, t: u32, floor: f64) -> Option<f64> {
         let mut near = std::mem::take(&mut self.scratch_near);
         near.clear();
         // Each original once: marked with a fresh generation as it is listed.
@@ -349,7 +350,13 @@ impl Builder {
             points: &points,
             keys: &keys,
         };
-        let bound = bound::height_over(&self.corners[t as usize], &originals, &chains, &mut edges);
+        let bound = bound::height_over(
+            &self.corners[t as usize],
+            &originals,
+            &chains,
+            floor,
+            &mut edges,
+        );
         self.scratch_edges3 = edges;
         self.scratch_originals = originals;
         self.scratch_near = near;
