@@ -191,3 +191,22 @@ fn a_crease_collapses_onto_the_patch_outline() {
         "{drawn} of {original} triangles at 1 % of the diagonal"
     );
 }
+
+/// mgen-2-3 reduced (`--reduce-to`): a 30 × 30 grid stretched into slivers (aspect 80, a strip
+/// 70 times longer than wide) with one step along it (1 800 triangles). meshoptimizer stays
+/// near 8e-4 of the diagonal down to 12 triangles; we kept 28 at 1e-3 and 26 at 5e-3 (5.5×
+/// its error at 0.5 %). The fan triangles beside the step are long and thin: bounded by their
+/// height over the originals under them, the wall's height (the whole step) was taken where its
+/// distance is a fraction of it, and split at most 6 times the parts stayed longer than the
+/// grid's cells, their Lipschitz term above the step. With the distance to a steep original and
+/// 10 splits: 11.
+#[test]
+fn a_long_step_of_slivers_simplifies() {
+    let (drawn, original) = cut_triangles("mgen-2-3-step.obj", 1e-3);
+    eprintln!("mgen-2-3-step: {drawn} of {original} triangles at 1e-3 of the diagonal");
+    assert_eq!(original, 1_800);
+    assert!(
+        drawn <= 16,
+        "{drawn} of {original} triangles at 1e-3 of the diagonal"
+    );
+}

@@ -43,7 +43,9 @@ use crate::mt::{MtHierarchy, MtParts};
 /// 13: split pieces merged back and pieces kept by the triangle they moved with
 /// (`mt::build::measure`): other errors and hierarchies.
 /// 14: an interior vertex may move onto the border anywhere: other hierarchies.
-pub(crate) const FORMAT_VERSION: u32 = 14;
+/// 15: height bounds take the distance to a steep original (`mt::bound::height_over`) and fan
+/// triangles split up to 10 times, not 6 (`mt::build::FAN_DEPTH`): other (tighter) errors.
+pub(crate) const FORMAT_VERSION: u32 = 15;
 
 const MAGIC: &[u8; 8] = b"PWMTCACH";
 const HEADER: usize = 8 + 4 + 16 + 8 + 16;

@@ -78,7 +78,12 @@ const SLACK: f64 = 0.2;
 const PIECE_DEPTH: u8 = 8;
 
 /// How many times a fan triangle may be split while it is bounded (the parts are not kept).
-const FAN_DEPTH: u8 = 6;
+/// Long thin fan triangles need many: beside a step along a strip of slivers
+/// (`models/generated/mgen-2-3-step.obj`), where only parts shorter than the grid's cells are
+/// bounded below the step's height, 6 kept 28 of its 1 800 triangles at 1e-3 of its diagonal,
+/// 10 keep 11 (14: 10). Building costs 0–4 % more (`benches/mt_build`, two runs each: the
+/// bunny on one thread 4.94–5.06 → 5.02–5.14 s, the bumpy torus 1.57–1.62 → 1.63–1.66 s).
+const FAN_DEPTH: u8 = 10;
 
 /// A popped candidate whose estimated error ([`Builder::predict`]) exceeds its key by more
 /// than this ratio goes back into the heap keyed by the estimate.
