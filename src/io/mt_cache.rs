@@ -45,7 +45,9 @@ use crate::mt::{MtHierarchy, MtParts};
 /// 14: an interior vertex may move onto the border anywhere: other hierarchies.
 /// 15: height bounds take the distance to a steep original (`mt::bound::height_over`) and fan
 /// triangles split up to 10 times, not 6 (`mt::build::FAN_DEPTH`): other (tighter) errors.
-pub(crate) const FORMAT_VERSION: u32 = 15;
+/// 16: the height bound's cover argument tries points off the fan triangle's centroid
+/// (`mt::bound::height_over`): other (tighter) errors.
+pub(crate) const FORMAT_VERSION: u32 = 16;
 
 const MAGIC: &[u8; 8] = b"PWMTCACH";
 const HEADER: usize = 8 + 4 + 16 + 8 + 16;

@@ -197,8 +197,8 @@ pub(super) struct Chains<'a> {
 /// height over a fan triangle beside it is the whole step). The cover is checked by its boundary: an edge shared by two
 /// originals that both face along the normal has their projections on either side of it, so
 /// the union's boundary lies on the other edges; when none of those enters `tri`'s interior
-/// and one original covers its centroid, the union holds all of `tri` (its interior is
-/// connected). `None` when the cover or the facing fails: the caller bounds `tri` otherwise.
+/// and one original covers a point of its interior (the centroid, else one of three points
+/// off it), the union holds all of `tri` (its interior is connected). `None` when the cover or the facing fails: the caller bounds `tri` otherwise.
 /// `edges` is scratch.
 ///
 /// At the patch border (`chains`, else empty) the originals may leave uncovered the parts
@@ -209,7 +209,7 @@ pub(super) struct Chains<'a> {
 /// Let `m(q)` be how many originals' projections hold the point `q` of `tri`'s interior.
 /// Crossing an edge shared by two facing originals leaves `m` as it is; the only other
 /// edges allowed into the interior are chain edges, which one original each uses (a patch
-/// border edge), so crossing one changes `m` by ±1. With `m = 1` at the centroid `c` (one
+/// border edge), so crossing one changes `m` by ±1. With `m = 1` at an interior `c` (one
 /// original holds it, strictly, and no other touches it), `c` outside every closed chain
 /// `Γ` (the chain and its chord; even crossing number) and no chord entering the interior,
 /// a generic uncovered `q` (`m(q) = 0`) has the segment `qc` crossing the chains an odd
@@ -236,12 +236,9 @@ pub(super) fn height_over(
         return None;
     }
     let (sides, margin) = prism(tri);
-    let centroid = (a + b + c) / 3.0;
-    let mut covered = false;
     let mut worst = 0.0f64;
-    // Originals whose projection holds the centroid (margin included), whether one strictly,
-    // and whether a chain edge enters the interior.
-    let (mut holding, mut strictly, mut uncovered) = (0usize, false, false);
+    // Whether a chain edge enters the interior.
+    let mut uncovered = false;
     edges.clear();
     for (o, ids) in originals {
         // Signed distances of the corners inside each side plane: an original wholly outside
@@ -301,32 +298,6 @@ pub(super) fn height_over(
                 .fold(0.0, f64::max)
                 .min(height)
         });
-        if !covered {
-            let inside = (0..3).all(|k| {
-                let (p, q) = (o[k], o[(k + 1) % 3]);
-                n.dot((q - p).cross(centroid - p)) >= 0.0
-            });
-            covered = inside;
-        }
-        if !chains.spans.is_empty() {
-            // How far inside each side of the original's projection the centroid is.
-            let within = std::array::from_fn::<f64, 3, _>(|k| {
-                let (p, q) = (o[k], o[(k + 1) % 3]);
-                let len = p.distance(q);
-                if len > 0.0 {
-                    n.dot((q - p).cross(centroid - p)) / len
-                } else {
-                    f64::NEG_INFINITY
-                }
-            });
-            if within.iter().all(|&x| x >= -margin) {
-                holding += 1;
-                strictly |= within.iter().all(|&x| x > margin);
-            }
-        }
-    }
-    if !covered {
-        return None;
     }
     edges.sort_unstable_by_key(|e| e.0);
     let mut k = 0;
@@ -350,19 +321,73 @@ pub(super) fn height_over(
         k = end;
     }
     if uncovered {
-        if holding != 1 || !strictly {
-            return None;
-        }
         for &(start, stop, own) in chains.spans {
-            let points = &chains.points[start..stop];
-            let (first, last) = (points[0], points[points.len() - 1]);
+            let (first, last) = (chains.points[start], chains.points[stop - 1]);
             if !own && enters(&sides, margin, first, last) {
                 return None;
             }
-            worst = worst.max(between_chord_and_chain(tri, n, points, own, margin)?);
         }
     }
-    Some(worst * (1.0 + 1e-12))
+    // The argument needs one point of `tri`'s interior that an original holds (with chain
+    // edges inside: exactly one, strictly, the point outside every closed chain). The centroid
+    // first; where the originals are a regular grid and `tri`'s corners are grid vertices it
+    // often lies on an original edge (two hold it, neither strictly: a 4-triangle creased
+    // grid stopped there, `models/generated/mgen-4-4-crease.glb`), so three points off it are
+    // tried too.
+    let refs = [
+        (a + b + c) / 3.0,
+        a * 0.45 + b * 0.33 + c * 0.22,
+        a * 0.22 + b * 0.45 + c * 0.33,
+        a * 0.33 + b * 0.22 + c * 0.45,
+    ];
+    'refs: for r in refs {
+        let (mut covered, mut holding, mut strictly) = (false, 0usize, false);
+        for (o, _) in originals {
+            let side = |k: usize| {
+                let (p, q) = (o[k], o[(k + 1) % 3]);
+                n.dot((q - p).cross(r - p))
+            };
+            covered |= (0..3).all(|k| side(k) >= 0.0);
+            if !uncovered {
+                if covered {
+                    break;
+                }
+                continue;
+            }
+            // How far inside each side of the original's projection `r` is.
+            let within = std::array::from_fn::<f64, 3, _>(|k| {
+                let len = o[k].distance(o[(k + 1) % 3]);
+                if len > 0.0 {
+                    side(k) / len
+                } else {
+                    f64::NEG_INFINITY
+                }
+            });
+            if within.iter().all(|&x| x >= -margin) {
+                holding += 1;
+                strictly |= within.iter().all(|&x| x > margin);
+            }
+        }
+        if !covered {
+            continue;
+        }
+        if !uncovered {
+            return Some(worst * (1.0 + 1e-12));
+        }
+        if holding != 1 || !strictly {
+            continue;
+        }
+        let mut far = worst;
+        for &(start, stop, own) in chains.spans {
+            let points = &chains.points[start..stop];
+            match between_chord_and_chain(tri, n, points, own, margin, r) {
+                Some(x) => far = far.max(x),
+                None => continue 'refs,
+            }
+        }
+        return Some(far * (1.0 + 1e-12));
+    }
+    None
 }
 
 /// The inward side planes of `tri`'s prism (a point is inside when all three are ≥ 0: a
@@ -405,14 +430,15 @@ pub(super) fn enters(sides: &[(DVec3, DVec3); 3], margin: f64, p: DVec3, q: DVec
 
 /// The largest distance from a point of `tri` between the chord from the first to the last
 /// of `points` (original border vertices; `own`: a side of `tri`) and the chain they make to
-/// that chain, as [`height_over`] argues; `None` when the centroid is inside the closed
-/// chain or within `margin` of it.
+/// that chain, as [`height_over`] argues; `None` when `centre` (a point of `tri`'s interior)
+/// is inside the closed chain or within `margin` of it.
 fn between_chord_and_chain(
     tri: &Piece,
     n: DVec3,
     points: &[DVec3],
     own: bool,
     margin: f64,
+    centre: DVec3,
 ) -> Option<f64> {
     let a = points[0];
     let flat = |p: DVec3| p - n * n.dot(p - a);
@@ -422,13 +448,12 @@ fn between_chord_and_chain(
     }
     let u = n.cross(e);
     let plane = |p: DVec3| (e.dot(p - a), u.dot(p - a));
-    // The centroid must be outside the closed chain (crossing number even), clear of it.
-    let centroid = (tri[0] + tri[1] + tri[2]) / 3.0;
-    let (cx, cy) = plane(centroid);
+    // `centre` must be outside the closed chain (crossing number even), clear of it.
+    let (cx, cy) = plane(centre);
     let mut inside = false;
     for i in 0..points.len() {
         let (p, q) = (flat(points[i]), flat(points[(i + 1) % points.len()]));
-        if centroid.distance(crate::geom::closest_point_on_segment(centroid, p, q)) <= margin {
+        if centre.distance(crate::geom::closest_point_on_segment(centre, p, q)) <= margin {
             return None;
         }
         let ((px, py), (qx, qy)) = (plane(p), plane(q));
@@ -439,8 +464,8 @@ fn between_chord_and_chain(
     if inside {
         return None;
     }
-    // The sides of the chord's line that `tri`'s interior reaches: for its own side, the
-    // centroid's; else any a corner is strictly on.
+    // The sides of the chord's line that `tri`'s interior reaches: for its own side,
+    // `centre`'s; else any a corner is strictly on.
     let reach = |sign: f64| match own {
         true => sign * cy > 0.0,
         false => tri.iter().any(|&x| sign * u.dot(x - a) > 0.0),
@@ -587,6 +612,81 @@ mod tests {
         assert!(inside > 0.5 * whole, "{inside} of {whole}");
     }
 
+    /// `max_{q ∈ tri} d(q, originals)` measured at `(k + 1)(k + 2) / 2` points of `tri`.
+    fn dense_distance(tri: &Piece, originals: &[(Piece, [u32; 3])], k: usize) -> f64 {
+        let mut dense = 0.0f64;
+        for i in 0..=k {
+            for j in 0..=k - i {
+                let (u, v) = (i as f64 / k as f64, j as f64 / k as f64);
+                let q = tri[0] + (tri[1] - tri[0]) * u + (tri[2] - tri[0]) * v;
+                let d = originals
+                    .iter()
+                    .map(|(o, _)| point_triangle_distance(q, o[0], o[1], o[2]))
+                    .fold(f64::INFINITY, f64::min);
+                dense = dense.max(d);
+            }
+        }
+        dense
+    }
+
+    /// A strip of 16 originals, its border row (ids 0..=8) zigzagging about y = 0, its inner
+    /// row (ids 9..) at y = 1.5 (`wavy`: heights varying, else flat), a triangle over it with
+    /// its side on y = 0 (a chord of the border), the border chain's points and edge keys.
+    #[allow(clippy::type_complexity)]
+    fn zigzag_strip(wavy: bool) -> (Vec<(Piece, [u32; 3])>, Piece, Vec<DVec3>, Vec<(u32, u32)>) {
+        let n = 8u32;
+        let lift = if wavy { 1.0 } else { 0.0 };
+        let border = |i: u32| {
+            let y = match i {
+                0 => 0.0,
+                _ if i == n => 0.0,
+                _ if i % 2 == 1 => 0.3,
+                _ => -0.2,
+            };
+            DVec3::new(i as f64, y, lift * 0.05 * (i % 3) as f64)
+        };
+        let inner = |i: u32| DVec3::new(i as f64, 1.5, lift * 0.02 * (i % 2) as f64);
+        let mut originals = Vec::new();
+        for i in 0..n {
+            let (p, q, r, s) = (i, i + 1, n + 1 + i, n + 2 + i);
+            originals.push(([border(i), border(i + 1), inner(i)], [p, q, r]));
+            originals.push(([border(i + 1), inner(i + 1), inner(i)], [q, s, r]));
+        }
+        let tri = [border(0), border(n), inner(n / 2)];
+        let points: Vec<DVec3> = (0..=n).map(border).collect();
+        let keys: Vec<(u32, u32)> = (0..n).map(|i| (i, i + 1)).collect();
+        (originals, tri, points, keys)
+    }
+
+    /// The flat strip: the triangle's centroid (4, 0.5) lies on the original edge from border
+    /// vertex 4 to inner vertex 4, so two originals hold it and neither strictly. The bound is
+    /// found from a point off it and holds a dense measurement (with the centroid alone it was
+    /// `None`: a creased grid's 4 → 3 triangle collapse was bounded at 4.6× its distance,
+    /// `models/generated/mgen-4-4-crease.glb`).
+    #[test]
+    fn the_border_bound_needs_no_centroid_inside_one_original() {
+        let (originals, tri, points, keys) = zigzag_strip(false);
+        let centroid = (tri[0] + tri[1] + tri[2]) / 3.0;
+        assert_eq!(centroid, DVec3::new(4.0, 0.5, 0.0));
+        let spans = [(0, points.len(), true)];
+        let chains = Chains {
+            spans: &spans,
+            points: &points,
+            keys: &keys,
+        };
+        let mut edges = Vec::new();
+        let bound = height_over(&tri, &originals, &chains, 0.0, &mut edges).expect("a bound");
+        let dense = dense_distance(&tri, &originals, 80);
+        assert!(
+            dense > 0.0 && dense <= bound,
+            "dense {dense}, bound {bound}"
+        );
+        assert!(
+            bound < 1.5 * dense,
+            "bound {bound} loose over dense {dense}"
+        );
+    }
+
     /// A step: a low plane, a steep wall (1 up over 0.05 across) and a high plane, and a
     /// triangle 0.01 above the high plane that reaches halfway over the wall seen from above.
     /// The wall's height under it is up to 0.51, its distance from it under 0.03: the
@@ -620,19 +720,7 @@ mod tests {
         };
         let mut edges = Vec::new();
         let bound = height_over(&tri, &originals, &none, 0.0, &mut edges).expect("a bound");
-        let k = 100;
-        let mut dense = 0.0f64;
-        for i in 0..=k {
-            for j in 0..=k - i {
-                let (u, v) = (i as f64 / k as f64, j as f64 / k as f64);
-                let q = tri[0] + (tri[1] - tri[0]) * u + (tri[2] - tri[0]) * v;
-                let d = originals
-                    .iter()
-                    .map(|(o, _)| point_triangle_distance(q, o[0], o[1], o[2]))
-                    .fold(f64::INFINITY, f64::min);
-                dense = dense.max(d);
-            }
-        }
+        let dense = dense_distance(&tri, &originals, 100);
         assert!(dense <= bound, "dense {dense} above the bound {bound}");
         assert!(
             bound < 1.5 * dense,
@@ -647,27 +735,7 @@ mod tests {
     /// chain (the cover fails).
     #[test]
     fn the_border_bound_holds_a_dense_measurement() {
-        let n = 8u32;
-        // Border row (ids 0..=n) zigzagging about y = 0; inner row (ids n+1..) at y = 1.5.
-        let border = |i: u32| {
-            let y = match i {
-                0 => 0.0,
-                _ if i == n => 0.0,
-                _ if i % 2 == 1 => 0.3,
-                _ => -0.2,
-            };
-            DVec3::new(i as f64, y, 0.05 * (i % 3) as f64)
-        };
-        let inner = |i: u32| DVec3::new(i as f64, 1.5, 0.02 * (i % 2) as f64);
-        let mut originals = Vec::new();
-        for i in 0..n {
-            let (p, q, r, s) = (i, i + 1, n + 1 + i, n + 2 + i);
-            originals.push(([border(i), border(i + 1), inner(i)], [p, q, r]));
-            originals.push(([border(i + 1), inner(i + 1), inner(i)], [q, s, r]));
-        }
-        let tri = [border(0), border(n), inner(n / 2)];
-        let points: Vec<DVec3> = (0..=n).map(border).collect();
-        let keys: Vec<(u32, u32)> = (0..n).map(|i| (i, i + 1)).collect();
+        let (originals, tri, points, keys) = zigzag_strip(true);
         let spans = [(0, points.len(), true)];
         let chains = Chains {
             spans: &spans,
@@ -682,19 +750,7 @@ mod tests {
             keys: &[],
         };
         assert_eq!(height_over(&tri, &originals, &none, 0.0, &mut edges), None);
-        let k = 80;
-        let mut dense = 0.0f64;
-        for i in 0..=k {
-            for j in 0..=k - i {
-                let (u, v) = (i as f64 / k as f64, j as f64 / k as f64);
-                let q = tri[0] + (tri[1] - tri[0]) * u + (tri[2] - tri[0]) * v;
-                let d = originals
-                    .iter()
-                    .map(|(o, _)| point_triangle_distance(q, o[0], o[1], o[2]))
-                    .fold(f64::INFINITY, f64::min);
-                dense = dense.max(d);
-            }
-        }
+        let dense = dense_distance(&tri, &originals, 80);
         assert!(dense <= bound, "dense {dense} above the bound {bound}");
         assert!(
             bound < 1.5 * dense,
