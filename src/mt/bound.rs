@@ -658,6 +658,22 @@ mod tests {
         (originals, tri, points, keys)
     }
 
+    /// [`height_over`] of a [`zigzag_strip`]'s triangle, with its border chain.
+    fn strip_bound(
+        originals: &[(Piece, [u32; 3])],
+        tri: &Piece,
+        points: &[DVec3],
+        keys: &[(u32, u32)],
+    ) -> Option<f64> {
+        let spans = [(0, points.len(), true)];
+        let chains = Chains {
+            spans: &spans,
+            points,
+            keys,
+        };
+        height_over(tri, originals, &chains, 0.0, &mut Vec::new())
+    }
+
     /// The flat strip: the triangle's centroid (4, 0.5) lies on the original edge from border
     /// vertex 4 to inner vertex 4, so two originals hold it and neither strictly. The bound is
     /// found from a point off it and holds a dense measurement (with the centroid alone it was
@@ -668,14 +684,7 @@ mod tests {
         let (originals, tri, points, keys) = zigzag_strip(false);
         let centroid = (tri[0] + tri[1] + tri[2]) / 3.0;
         assert_eq!(centroid, DVec3::new(4.0, 0.5, 0.0));
-        let spans = [(0, points.len(), true)];
-        let chains = Chains {
-            spans: &spans,
-            points: &points,
-            keys: &keys,
-        };
-        let mut edges = Vec::new();
-        let bound = height_over(&tri, &originals, &chains, 0.0, &mut edges).expect("a bound");
+        let bound = strip_bound(&originals, &tri, &points, &keys).expect("a bound");
         let dense = dense_distance(&tri, &originals, 80);
         assert!(
             dense > 0.0 && dense <= bound,
@@ -736,14 +745,8 @@ mod tests {
     #[test]
     fn the_border_bound_holds_a_dense_measurement() {
         let (originals, tri, points, keys) = zigzag_strip(true);
-        let spans = [(0, points.len(), true)];
-        let chains = Chains {
-            spans: &spans,
-            points: &points,
-            keys: &keys,
-        };
+        let bound = strip_bound(&originals, &tri, &points, &keys).expect("a bound");
         let mut edges = Vec::new();
-        let bound = height_over(&tri, &originals, &chains, 0.0, &mut edges).expect("a bound");
         let none = Chains {
             spans: &[],
             points: &[],
