@@ -5,50 +5,96 @@ use glam::DVec3;
 /// Closest point to `p` on the triangle `(a, b, c)` (degenerate triangles included), by the
 /// Voronoi-region walk of Ericson, *Real-Time Collision Detection* (2005), §5.1.5.
 pub(crate) fn closest_point_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
-    let ab = b - a;
-    let ac = c - a;
-    if ab.cross(ac) == DVec3::ZERO {
-        // Two corners the same, or all three on a line: the walk below would divide 0 by 0
-        // (a triangle (a, a, c) gave NaN, and a caller's `min` then skipped it: a tube
-        // tessellated to slivers along its seam read as 3.2 ε from its own mesh).
-        return nearest_edge_point(p, a, b, c);
+    Prepared::new(a, b, c).closest_point(p)
+}
+
+/// A triangle with what [`closest_point_on_triangle`] derives from its corners alone, kept
+/// for triangles measured against many points (the same operations in the same order: the
+/// results are bit-identical).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Prepared {
+    a: DVec3,
+    b: DVec3,
+    c: DVec3,
+    ab: DVec3,
+    ac: DVec3,
+    /// Whether the corners are on a line (or two are the same).
+    flat: bool,
+}
+
+impl Prepared {
+    pub(crate) fn new(a: DVec3, b: DVec3, c: DVec3) -> Prepared {
+        let (ab, ac) = (b - a, c - a);
+        Prepared {
+            a,
+            b,
+            c,
+            ab,
+            ac,
+            flat: ab.cross(ac) == DVec3::ZERO,
+        }
     }
-    let ap = p - a;
-    let d1 = ab.dot(ap);
-    let d2 = ac.dot(ap);
-    if d1 <= 0.0 && d2 <= 0.0 {
-        return a;
+
+    /// Distance from `p` to the triangle.
+    #[inline]
+    pub(crate) fn distance(&self, p: DVec3) -> f64 {
+        self.closest_point(p).distance(p)
     }
-    let bp = p - b;
-    let d3 = ab.dot(bp);
-    let d4 = ac.dot(bp);
-    if d3 >= 0.0 && d4 <= d3 {
-        return b;
+
+    /// [`closest_point_on_triangle`].
+    #[inline]
+    pub(crate) fn closest_point(&self, p: DVec3) -> DVec3 {
+        let Prepared {
+            a,
+            b,
+            c,
+            ab,
+            ac,
+            flat,
+        } = *self;
+        if flat {
+            // Two corners the same, or all three on a line: the walk below would divide 0 by 0
+            // (a triangle (a, a, c) gave NaN, and a caller's `min` then skipped it: a tube
+            // tessellated to slivers along its seam read as 3.2 ε from its own mesh).
+            return nearest_edge_point(p, a, b, c);
+        }
+        let ap = p - a;
+        let d1 = ab.dot(ap);
+        let d2 = ac.dot(ap);
+        if d1 <= 0.0 && d2 <= 0.0 {
+            return a;
+        }
+        let bp = p - b;
+        let d3 = ab.dot(bp);
+        let d4 = ac.dot(bp);
+        if d3 >= 0.0 && d4 <= d3 {
+            return b;
+        }
+        let vc = d1 * d4 - d3 * d2;
+        if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+            return a + ab * (d1 / (d1 - d3));
+        }
+        let cp = p - c;
+        let d5 = ab.dot(cp);
+        let d6 = ac.dot(cp);
+        if d6 >= 0.0 && d5 <= d6 {
+            return c;
+        }
+        let vb = d5 * d2 - d1 * d6;
+        if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+            return a + ac * (d2 / (d2 - d6));
+        }
+        let va = d3 * d6 - d5 * d4;
+        if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+            return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+        }
+        let denom = va + vb + vc;
+        if denom.abs() < f64::MIN_POSITIVE {
+            // Collinear corners not caught above.
+            return nearest_edge_point(p, a, b, c);
+        }
+        a + ab * (vb / denom) + ac * (vc / denom)
     }
-    let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        return a + ab * (d1 / (d1 - d3));
-    }
-    let cp = p - c;
-    let d5 = ab.dot(cp);
-    let d6 = ac.dot(cp);
-    if d6 >= 0.0 && d5 <= d6 {
-        return c;
-    }
-    let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        return a + ac * (d2 / (d2 - d6));
-    }
-    let va = d3 * d6 - d5 * d4;
-    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
-    }
-    let denom = va + vb + vc;
-    if denom.abs() < f64::MIN_POSITIVE {
-        // Collinear corners not caught above.
-        return nearest_edge_point(p, a, b, c);
-    }
-    a + ab * (vb / denom) + ac * (vc / denom)
 }
 
 /// The nearest point to `p` on the three edges of `(a, b, c)`.

@@ -168,8 +168,9 @@ impl Polygon {
 }
 
 /// An edge of an original triangle: its vertex ids (sorted), whether the triangle faces
-/// along the normal, its two ends.
-pub(super) type Edge = ((u32, u32), bool, DVec3, DVec3);
+/// along the normal, and where it is: the triangle's index in the list and the edge's first
+/// corner in it (small, so the sort by ids moves little).
+pub(super) type Edge = ((u32, u32), bool, u32, u8);
 
 /// The stretches of the original patch border that live border edges at a triangle's corners
 /// stand for ([`height_over`]): per span, the range of `points` holding the original border
@@ -240,7 +241,7 @@ pub(super) fn height_over(
     // Whether a chain edge enters the interior.
     let mut uncovered = false;
     edges.clear();
-    for (o, ids) in originals {
+    for (i, (o, ids)) in originals.iter().enumerate() {
         // Signed distances of the corners inside each side plane: an original wholly outside
         // one has no part over `tri`, and an edge wholly outside one (margin included) cannot
         // enter its interior — neither is looked at further (the edge test below would refuse
@@ -253,7 +254,7 @@ pub(super) fn height_over(
                 continue;
             }
             let (u, v) = (ids[k], ids[j]);
-            edges.push(((u.min(v), u.max(v)), facing, o[k], o[j]));
+            edges.push(((u.min(v), u.max(v)), facing, i as u32, k as u8));
         }
         if inside.iter().any(|d| d.iter().all(|&x| x < 0.0)) {
             continue;
@@ -300,6 +301,11 @@ pub(super) fn height_over(
         });
     }
     edges.sort_unstable_by_key(|e| e.0);
+    // The ends of an edge.
+    let ends = |e: &Edge| {
+        let (o, k) = (&originals[e.2 as usize].0, e.3 as usize);
+        (o[k], o[(k + 1) % 3])
+    };
     let mut k = 0;
     while k < edges.len() {
         let mut end = k + 1;
@@ -307,10 +313,14 @@ pub(super) fn height_over(
             end += 1;
         }
         // Two facing originals on either side: the edge runs opposite ways in them.
-        let inner = end - k == 2 && edges[k].1 && edges[k + 1].1 && edges[k].2 == edges[k + 1].3;
+        let inner = end - k == 2
+            && edges[k].1
+            && edges[k + 1].1
+            && ends(&edges[k]).0 == ends(&edges[k + 1]).1;
         if !inner {
             // A boundary edge: it must not enter the interior of `tri`'s prism.
-            if enters(&sides, margin, edges[k].2, edges[k].3) {
+            let (p, q) = ends(&edges[k]);
+            if enters(&sides, margin, p, q) {
                 if end - k == 1 && chains.keys.binary_search(&edges[k].0).is_ok() {
                     uncovered = true;
                 } else {

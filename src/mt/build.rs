@@ -133,6 +133,8 @@ struct Builder {
     point_mark: Vec<u32>,
     point_slot: Vec<u32>,
     point_generation: u32,
+    /// The fan's triangles, prepared for [`Builder::fan_distance`]'s many points.
+    fan_prepared: Vec<crate::geom::Prepared>,
     fan_dist: Vec<f64>,
     /// Per original triangle: `origin_generation` when [`Builder::height_bound`] has listed it.
     origin_mark: Vec<u32>,
@@ -304,6 +306,7 @@ impl Builder {
             point_slot: vec![0; n],
             point_generation: 0,
             fan_dist: Vec::new(),
+            fan_prepared: Vec::new(),
             origin_mark: vec![0; m],
             origin_generation: 0,
             corners,

@@ -16,7 +16,7 @@
 
 use glam::DVec3;
 
-use crate::geom::point_triangle_distance;
+use crate::geom::Prepared;
 
 /// Triangles per leaf at most.
 const LEAF: usize = 4;
@@ -43,7 +43,7 @@ struct Node {
 pub(super) struct SurfaceBvh {
     nodes: Vec<Node>,
     /// The triangles in leaf order, and their indices in the patch.
-    tris: Vec<[DVec3; 3]>,
+    tris: Vec<Prepared>,
     ids: Vec<u32>,
     /// Where each triangle of the patch is in `tris`.
     slot: Vec<u32>,
@@ -139,7 +139,12 @@ impl SurfaceBvh {
         }
         SurfaceBvh {
             nodes,
-            tris: order.iter().map(|&t| triangles[t as usize]).collect(),
+            tris: (order.iter())
+                .map(|&t| {
+                    let [a, b, c] = triangles[t as usize];
+                    Prepared::new(a, b, c)
+                })
+                .collect(),
             ids: order,
             slot,
         }
@@ -162,8 +167,8 @@ impl SurfaceBvh {
             }
             if node.count > 0 {
                 let first = node.first as usize;
-                for [a, b, c] in &self.tris[first..first + node.count as usize] {
-                    best = best.min(point_triangle_distance(p, *a, *b, *c));
+                for t in &self.tris[first..first + node.count as usize] {
+                    best = best.min(t.distance(p));
                     if best <= stop {
                         return best;
                     }
@@ -201,10 +206,10 @@ impl SurfaceBvh {
         let mut corners = [f64::INFINITY; 3];
         let mut convex = (f64::INFINITY, None);
         let measure =
-            |t: &[DVec3; 3], id: u32, corners: &mut [f64; 3], convex: &mut (f64, Option<u32>)| {
+            |t: &Prepared, id: u32, corners: &mut [f64; 3], convex: &mut (f64, Option<u32>)| {
                 let mut far = 0.0f64;
                 for (k, &p) in piece.iter().enumerate() {
-                    let d = point_triangle_distance(p, t[0], t[1], t[2]);
+                    let d = t.distance(p);
                     corners[k] = corners[k].min(d);
                     far = far.max(d);
                 }
@@ -269,6 +274,7 @@ impl SurfaceBvh {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geom::point_triangle_distance;
 
     /// A wavy grid of `n` × `n` quads, each split in two, with a few triangles lifted.
     fn surface(n: u32) -> Vec<[DVec3; 3]> {

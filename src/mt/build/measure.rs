@@ -7,13 +7,14 @@ use glam::DVec3;
 use super::super::bound::{self, Piece};
 use super::super::nearest::PieceBound;
 use super::{Builder, FAN_DEPTH, NEVER, PIECE_DEPTH, SLACK, samples};
-use crate::geom::point_triangle_distance;
+use crate::geom::Prepared;
 
 impl Builder {
     /// Distance from `p` to the live or fan triangle `t`.
+    #[cfg(test)]
     fn dist(&self, p: DVec3, t: u32) -> f64 {
         let [a, b, c] = self.corners[t as usize];
-        point_triangle_distance(p, a, b, c)
+        Prepared::new(a, b, c).distance(p)
     }
 
     /// A new piece of the original surface, `depth` splits below an original triangle.
@@ -87,6 +88,11 @@ impl Builder {
             self.point_generation = 1;
         }
         self.fan_dist.clear();
+        self.fan_prepared.clear();
+        for &t in fan {
+            let [a, b, c] = self.corners[t as usize];
+            self.fan_prepared.push(Prepared::new(a, b, c));
+        }
         let mut lower = self.sample_lower(fan, 0.0);
         let floor = lower.max(inherited);
         for (&o, &k) in region.iter().zip(own) {
@@ -427,7 +433,7 @@ impl Builder {
         for (i, &t) in fan.iter().enumerate() {
             let mut far = 0.0f64;
             for k in 0..3 {
-                let d = self.fan_distance(fan, ids[k], rows[k], i);
+                let d = self.fan_distance(ids[k], rows[k], i);
                 corner_best[k] = corner_best[k].min(d);
                 far = far.max(d);
             }
@@ -444,18 +450,18 @@ impl Builder {
         let mut far = 0.0f64;
         for id in self.piece_points[o as usize] {
             let row = self.fan_distances(fan, id);
-            far = far.max(self.fan_distance(fan, id, row, k));
+            far = far.max(self.fan_distance(id, row, k));
         }
         far
     }
 
     /// Entry `k` of a row of [`Builder::fan_distances`], measured if it is not yet.
-    fn fan_distance(&mut self, fan: &[u32], id: u32, row: usize, k: usize) -> f64 {
+    fn fan_distance(&mut self, id: u32, row: usize, k: usize) -> f64 {
         let d = self.fan_dist[row + k];
         if !d.is_nan() {
             return d;
         }
-        let d = self.dist(self.points[id as usize], fan[k]);
+        let d = self.fan_prepared[k].distance(self.points[id as usize]);
         self.fan_dist[row + k] = d;
         d
     }
