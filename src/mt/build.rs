@@ -188,7 +188,7 @@ struct Builder {
     /// [`Builder::predict`] looks at changed).
     ring: Vec<u32>,
     /// The prospective fan of a candidate ([`Builder::predict`]).
-    scratch_predict: Vec<[DVec3; 3]>,
+    scratch_predict: Vec<crate::geom::Prepared>,
 }
 
 impl Builder {
@@ -628,7 +628,8 @@ impl Builder {
             error = error.max(self.node_error[self.created_by[t as usize] as usize]);
             let tri = self.tris[t as usize];
             if !tri.contains(&to) {
-                fan.push(tri.map(|i| if i == from { pt } else { self.pos[i as usize] }));
+                let [a, b, c] = tri.map(|i| if i == from { pt } else { self.pos[i as usize] });
+                fan.push(crate::geom::Prepared::new(a, b, c));
             }
         }
         if fan.is_empty() {
@@ -656,16 +657,15 @@ impl Builder {
                     }
                     self.mark[v as usize] = seen;
                     let p = self.pos[v as usize];
-                    let [a, b, c] = fan[own];
-                    let mut d = point_triangle_distance(p, a, b, c);
+                    let mut d = fan[own].distance(p);
                     // Only the largest distance counts: the search for the nearest stops
                     // once one triangle is within it.
-                    for (j, &[a, b, c]) in fan.iter().enumerate() {
+                    for (j, t) in fan.iter().enumerate() {
                         if d <= error {
                             break;
                         }
                         if j != own {
-                            d = d.min(point_triangle_distance(p, a, b, c));
+                            d = d.min(t.distance(p));
                         }
                     }
                     error = error.max(d);

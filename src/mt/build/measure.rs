@@ -508,6 +508,7 @@ impl Builder {
         // vertices (collapses move a vertex onto another), on the surface.
         let mut edges = std::mem::take(&mut self.fan_edges);
         edges.clear();
+        let mut seed = None;
         for &t in fan {
             let tri = self.tris[t as usize];
             let [a, b, c] = self.corners[t as usize];
@@ -521,8 +522,10 @@ impl Builder {
             }
             for (s, _) in samples(a, b, c).into_iter().zip(todo).filter(|x| x.1) {
                 // The outcome, max(worst, nearest), is unchanged once a triangle within
-                // `worst` is found: the search stops there.
-                let best = self.surface.nearest(s, worst);
+                // `worst` is found: the search stops there. The last triangle found is
+                // measured first (samples of a fan are close together).
+                let (best, at) = self.surface.nearest(s, worst, seed);
+                seed = at.or(seed);
                 if best.is_finite() {
                     worst = worst.max(best);
                 }
