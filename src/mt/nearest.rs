@@ -336,6 +336,30 @@ mod tests {
         }
     }
 
+    /// A seed (any triangle, the last one found as `Builder::sample_lower` passes, or one out
+    /// of range) changes neither the distance nor, with a stop, whether it is within it.
+    #[test]
+    fn a_seed_changes_nothing() {
+        let tris = surface(12);
+        let bvh = SurfaceBvh::new(&tris);
+        let mut last = None;
+        for (i, p) in points(300).into_iter().enumerate() {
+            let exact = brute(&tris, p);
+            for seed in [last, Some((i * 7 % tris.len()) as u32), Some(u32::MAX)] {
+                let (d, at) = bvh.nearest(p, -1.0, seed);
+                assert_eq!(d, exact, "at {p}, seed {seed:?}");
+                assert!(at.is_some());
+                let stop = exact * 1.5;
+                let (within, _) = bvh.nearest(p, stop, seed);
+                assert!(
+                    within >= exact && within <= stop,
+                    "at {p}: {within} for {exact}"
+                );
+            }
+            last = bvh.nearest(p, -1.0, last).1;
+        }
+    }
+
     #[test]
     fn piece_bounds_match_a_scan() {
         let tris = surface(16);
