@@ -14,7 +14,7 @@ impl Builder {
     #[cfg(test)]
     fn dist(&self, p: DVec3, t: u32) -> f64 {
         let [a, b, c] = self.corners[t as usize];
-        Prepared::new(a, b, c).distance(p)
+        crate::geom::point_triangle_distance(p, a, b, c)
     }
 
     /// A new piece of the original surface, `depth` splits below an original triangle.
