@@ -6,8 +6,9 @@
 //!   occurrence paths (`a/b/c`: groups `a`, `b`, node `c`), all under one root group that turns
 //!   the model's axes and unit into the file's ([`ExportOptions::up`], [`ExportOptions::scale`]);
 //! - one mesh per shell (per part outside STEP: the key is `(part, shell)`), tessellated once in
-//!   the shell's own coordinates and shared by every placement of it; its colour is the first
-//!   coloured face's;
+//!   the shell's own coordinates and shared by every placement of it; its faces (patches) in
+//!   order of their colours' first appearance, one glTF primitive per colour
+//!   ([`ExportMesh::runs`]), so a face's or a mesh patch's colour is kept;
 //! - every face tessellated to one ε in its own units: the absolute tolerance divided by the
 //!   placement's scale, or, for a pixel error, the finest ε that any placement of the same face
 //!   asks for in `default_view`.
@@ -221,7 +222,20 @@ pub fn assemble(scene: &Scene, opts: &ExportOptions) -> Result<ExportScene, Expo
                     name: part_name.clone(),
                     ..ExportMesh::default()
                 };
-                for (p, eps) in patches {
+                // Faces grouped by colour (stable: first appearance), one run each.
+                let mut first: Vec<Option<[u32; 3]>> = Vec::new();
+                let mut order: Vec<(usize, &(Cow<'_, Patch>, f64))> = (patches.iter())
+                    .map(|pe| {
+                        let key = pe.0.color.map(|c| c.map(f32::to_bits));
+                        let rank = first.iter().position(|&k| k == key).unwrap_or_else(|| {
+                            first.push(key);
+                            first.len() - 1
+                        });
+                        (rank, pe)
+                    })
+                    .collect();
+                order.sort_by_key(|&(rank, _)| rank);
+                for (_, (p, eps)) in order {
                     let eps = *eps;
                     let local = Patch {
                         transform: DMat4::IDENTITY,
@@ -229,10 +243,16 @@ pub fn assemble(scene: &Scene, opts: &ExportOptions) -> Result<ExportScene, Expo
                     };
                     let mut m = PatchMesh::default();
                     t.patch(&local, eps, &mut m);
-                    append_used(&mut mesh, &m);
-                    if mesh.color.is_none() {
-                        mesh.color = p.color.map(|c| [c[0], c[1], c[2], 1.0]);
+                    // A face or patch of another colour than the triangles before it
+                    // starts a run (a primitive of its own).
+                    let color = p.color.map(|c| [c[0], c[1], c[2], 1.0]);
+                    let current = mesh.runs.last().map_or(mesh.color, |r| r.1);
+                    if mesh.indices.is_empty() {
+                        mesh.color = color;
+                    } else if color != current && !m.triangles.is_empty() {
+                        mesh.runs.push((mesh.indices.len(), color));
                     }
+                    append_used(&mut mesh, &m);
                 }
                 mesh_of.insert(key, meshes.len());
                 meshes.push(mesh);
@@ -339,6 +359,52 @@ mod tests {
         assert!(doc.generator.starts_with("patchwork "));
         // Every patch contributed triangles (32 patches, at least 2 each).
         assert!(triangles(&doc) >= 64, "{}", triangles(&doc));
+    }
+
+    /// A mesh of three colours (`mgen-6-3-colours.obj`: one patch or more per colour, the
+    /// colours interleaved in the file) keeps them: one run per colour, each colour once, and
+    /// every triangle in the run of its patch's colour.
+    #[test]
+    fn colours_of_a_mesh_are_kept_one_run_each() {
+        let scene = load("generated/mgen-6-3-colours.obj");
+        let doc = assemble(&scene, &ExportOptions::default()).expect("assembles");
+        assert_eq!(doc.meshes.len(), 1);
+        let m = &doc.meshes[0];
+        let colours: Vec<_> = m.primitives().map(|(_, c)| c.expect("coloured")).collect();
+        let mut distinct: Vec<[u32; 4]> = (scene.patches.iter())
+            .map(|p| p.color.expect("coloured").map(f32::to_bits))
+            .map(|[r, g, b]| [r, g, b, 1f32.to_bits()])
+            .collect();
+        distinct.sort_unstable();
+        distinct.dedup();
+        assert_eq!(distinct.len(), 3);
+        let mut got: Vec<[u32; 4]> = colours.iter().map(|c| c.map(f32::to_bits)).collect();
+        got.sort_unstable();
+        assert_eq!(got, distinct, "each colour one run");
+        // Every triangle lies in the run of its colour: its vertices are vertices of patches
+        // of that colour (a cut's vertices are its patch's own, half-edge collapses move no
+        // vertex).
+        let mut of_colour: HashMap<[u32; 4], std::collections::HashSet<[u32; 3]>> = HashMap::new();
+        for p in &scene.patches {
+            let PatchSurface::Mesh(mesh) = &p.surface else {
+                panic!("a mesh patch");
+            };
+            let c = p.color.expect("coloured");
+            let key = [c[0], c[1], c[2], 1.0].map(f32::to_bits);
+            let set = of_colour.entry(key).or_default();
+            set.extend(
+                mesh.positions
+                    .iter()
+                    .map(|v| v.to_array().map(f32::to_bits)),
+            );
+        }
+        for (range, colour) in m.primitives() {
+            let key = colour.expect("coloured").map(f32::to_bits);
+            for &i in &m.indices[range] {
+                let v = m.positions[i as usize].map(f32::to_bits);
+                assert!(of_colour[&key].contains(&v), "vertex {i} of another colour");
+            }
+        }
     }
 
     /// A trimmed face's mesh also holds vertices of its untrimmed surface that no triangle

@@ -44,44 +44,49 @@ pub(super) fn build(scene: &ExportScene, plan: &Plan) -> (json::Root, Vec<u8>) {
             attributes.insert(Valid(json::mesh::Semantic::Normals), normals);
         }
 
-        let view = push_u32(&mut root, &mut bin, buffer, &mesh.indices);
-        let indices = root.push(json::Accessor {
-            buffer_view: Some(view),
-            byte_offset: None,
-            count: USize64::from(mesh.indices.len()),
-            component_type: Valid(json::accessor::GenericComponentType(
-                json::accessor::ComponentType::U32,
-            )),
-            extensions: None,
-            extras: Default::default(),
-            type_: Valid(json::accessor::Type::Scalar),
-            min: None,
-            max: None,
-            name: None,
-            normalized: false,
-            sparse: None,
-        });
-
-        let color = mesh.color.unwrap_or(DEFAULT_COLOR);
-        // `+ 0.0` turns -0.0 into 0.0, so that both share a material.
-        let key = color.map(|c| (c + 0.0).to_bits());
-        let material = *materials
-            .entry(key)
-            .or_insert_with(|| root.push(material(color)));
-
-        root.push(json::Mesh {
-            extensions: None,
-            extras: Default::default(),
-            name: non_empty(&mesh.name),
-            primitives: vec![json::mesh::Primitive {
-                attributes,
+        // One primitive per colour run, each with its own index view, all sharing the
+        // vertices.
+        let mut primitives = Vec::new();
+        for (range, color) in mesh.primitives() {
+            let view = push_u32(&mut root, &mut bin, buffer, &mesh.indices[range.clone()]);
+            let indices = root.push(json::Accessor {
+                buffer_view: Some(view),
+                byte_offset: None,
+                count: USize64::from(range.len()),
+                component_type: Valid(json::accessor::GenericComponentType(
+                    json::accessor::ComponentType::U32,
+                )),
+                extensions: None,
+                extras: Default::default(),
+                type_: Valid(json::accessor::Type::Scalar),
+                min: None,
+                max: None,
+                name: None,
+                normalized: false,
+                sparse: None,
+            });
+            let color = color.unwrap_or(DEFAULT_COLOR);
+            // `+ 0.0` turns -0.0 into 0.0, so that both share a material.
+            let key = color.map(|c| (c + 0.0).to_bits());
+            let material = *materials
+                .entry(key)
+                .or_insert_with(|| root.push(material(color)));
+            primitives.push(json::mesh::Primitive {
+                attributes: attributes.clone(),
                 extensions: None,
                 extras: Default::default(),
                 indices: Some(indices),
                 material: Some(material),
                 mode: Valid(json::mesh::Mode::Triangles),
                 targets: None,
-            }],
+            });
+        }
+
+        root.push(json::Mesh {
+            extensions: None,
+            extras: Default::default(),
+            name: non_empty(&mesh.name),
+            primitives,
             weights: None,
         });
     }

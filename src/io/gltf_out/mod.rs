@@ -7,9 +7,10 @@
 //!
 //! Layout of a written file:
 //! - one buffer, stored as the GLB `BIN` chunk;
-//! - per exported mesh one primitive (mode `TRIANGLES`) with a `POSITION` accessor (with the
+//! - per exported mesh one primitive (mode `TRIANGLES`) per colour run ([`ExportMesh::runs`]),
+//!   all sharing its vertices, with a `POSITION` accessor (with the
 //!   `min`/`max` the specification requires), a `NORMAL` accessor when the mesh has normals and
-//!   a `u32` index accessor, each in its own tightly packed buffer view (targets `ARRAY_BUFFER`
+//!   a `u32` index accessor per primitive, each in its own tightly packed buffer view (targets `ARRAY_BUFFER`
 //!   and `ELEMENT_ARRAY_BUFFER`); every view starts on a 4-byte boundary;
 //! - one material per distinct colour: metallic-roughness with `baseColorFactor` = the colour,
 //!   metallic 0, roughness `ROUGHNESS`, double-sided (CAD faces are drawn from both sides),
@@ -68,6 +69,27 @@ pub struct ExportMesh {
     pub indices: Vec<u32>,
     /// Base colour, linear RGBA, each component in `0..=1`; `None` is `DEFAULT_COLOR`.
     pub color: Option<[f32; 4]>,
+    /// More colours in one mesh (a mesh whose faces or patches differ in colour): each
+    /// `(start, colour)` gives the triangles from `indices[start]` to the next run's start
+    /// (or the end) that colour, `color` being that of the triangles before the first run.
+    /// Starts are multiples of 3, increasing, inside `indices`. One glTF primitive per run,
+    /// all sharing the mesh's vertices.
+    pub runs: Vec<(usize, Option<[f32; 4]>)>,
+}
+
+impl ExportMesh {
+    /// The mesh's primitives: every run of `indices` with its colour (the first is `color`'s,
+    /// empty when the mesh has no triangles before its first run).
+    pub(crate) fn primitives(
+        &self,
+    ) -> impl Iterator<Item = (std::ops::Range<usize>, Option<[f32; 4]>)> + '_ {
+        let starts = std::iter::once((0, self.color)).chain(self.runs.iter().copied());
+        let ends = (self.runs.iter().map(|r| r.0)).chain(std::iter::once(self.indices.len()));
+        starts
+            .zip(ends)
+            .map(|((start, color), end)| (start..end, color))
+            .filter(|(range, _)| !range.is_empty())
+    }
 }
 
 /// One node per placed instance of a part.
@@ -243,6 +265,22 @@ pub enum GltfWriteError {
         color: [f32; 4],
     },
 
+    /// A colour run of a mesh ([`ExportMesh::runs`]) does not start where a triangle does,
+    /// after the run before it and inside the indices.
+    #[error(
+        "{}: mesh {mesh} ({name:?}): colour run {run} starts at index {start}, which is not a \
+         triangle's first after the run before it and before the end ({indices} indices)",
+        .path.display()
+    )]
+    BadRun {
+        path: PathBuf,
+        mesh: usize,
+        name: String,
+        run: usize,
+        start: usize,
+        indices: usize,
+    },
+
     /// The file would exceed what GLB can describe (4 GiB with its 32-bit length fields).
     #[error("{}: too large for a .glb file: {reason}", .path.display())]
     TooLarge { path: PathBuf, reason: String },
@@ -266,6 +304,7 @@ impl GltfWriteError {
             | GltfWriteError::NonFinitePosition { path, .. }
             | GltfWriteError::NormalCount { path, .. }
             | GltfWriteError::InvalidColor { path, .. }
+            | GltfWriteError::BadRun { path, .. }
             | GltfWriteError::TooLarge { path, .. }
             | GltfWriteError::Encode { path, .. } => path,
         }
@@ -474,6 +513,7 @@ fn plan(path: &Path, scene: &ExportScene) -> Result<Plan, GltfWriteError> {
     let mut mesh_out = vec![None; scene.meshes.len()];
     let mut bin_len = 0u64;
     let mut triangles = 0usize;
+    let mut objects = 0u64;
     for (i, mesh) in scene.meshes.iter().enumerate() {
         if !placed[i] || mesh.indices.is_empty() {
             continue;
@@ -484,7 +524,8 @@ fn plan(path: &Path, scene: &ExportScene) -> Result<Plan, GltfWriteError> {
         bin_len += VEC3_BYTES * (mesh.positions.len() + mesh.normals.len()) as u64
             + INDEX_BYTES * mesh.indices.len() as u64;
         triangles += mesh.indices.len() / 3;
-        if let Some(reason) = too_large(bin_len, meshes.len()) {
+        objects += 3 + mesh.runs.len() as u64;
+        if let Some(reason) = too_large(bin_len, objects) {
             return Err(GltfWriteError::TooLarge {
                 path: path.to_owned(),
                 reason,
@@ -528,12 +569,13 @@ fn check_matrix(m: &[f32; 16]) -> Result<(), &'static str> {
 /// Whether the binary data, or the number of glTF objects, is beyond what a GLB can hold.
 ///
 /// Keeping the data under 4 GiB also keeps every object count (at most 3 accessors and 3 views
-/// per mesh, each mesh holding at least 28 bytes) below `u32::MAX`, so the `Index` pushes of
-/// [`build`] cannot panic.
-fn too_large(bin_len: u64, meshes: usize) -> Option<String> {
+/// per mesh and one more of each per colour run, each mesh holding at least 28 bytes and each
+/// run 12) below `u32::MAX`, so the `Index` pushes of [`build`] cannot panic. `objects`: the
+/// accessors so far.
+fn too_large(bin_len: u64, objects: u64) -> Option<String> {
     let limit = u64::from(u32::MAX) - GLB_HEADER_BYTES - 2 * CHUNK_HEADER_BYTES;
-    (bin_len > limit || meshes as u64 * 3 >= u64::from(u32::MAX))
-        .then(|| format!("{bin_len} bytes of binary data in {meshes} meshes"))
+    (bin_len > limit || objects >= u64::from(u32::MAX))
+        .then(|| format!("{bin_len} bytes of binary data in {objects} accessors"))
 }
 
 fn check_mesh(path: &Path, i: usize, mesh: &ExportMesh) -> Result<(), GltfWriteError> {
@@ -579,16 +621,32 @@ fn check_mesh(path: &Path, i: usize, mesh: &ExportMesh) -> Result<(), GltfWriteE
             vertices: mesh.positions.len(),
         });
     }
-    match mesh.color {
-        Some(color) if !color.iter().all(|c| (0.0..=1.0).contains(c)) => {
-            Err(GltfWriteError::InvalidColor {
+    let mut after = 0;
+    for (run, &(start, _)) in mesh.runs.iter().enumerate() {
+        if start % 3 != 0 || start < after || start >= mesh.indices.len() {
+            return Err(GltfWriteError::BadRun {
                 path: path(),
                 mesh: i,
                 name: name(),
-                color,
-            })
+                run,
+                start,
+                indices: mesh.indices.len(),
+            });
         }
-        _ => Ok(()),
+        after = start + 3;
+    }
+    let colors = std::iter::once(mesh.color).chain(mesh.runs.iter().map(|r| r.1));
+    match colors
+        .flatten()
+        .find(|c| !c.iter().all(|c| (0.0..=1.0).contains(c)))
+    {
+        Some(color) => Err(GltfWriteError::InvalidColor {
+            path: path(),
+            mesh: i,
+            name: name(),
+            color,
+        }),
+        None => Ok(()),
     }
 }
 

@@ -44,6 +44,7 @@ fn quad() -> ExportMesh {
         normals: vec![[0.0, 0.0, 1.0]; 4],
         indices: vec![0, 1, 2, 0, 2, 3],
         color: Some(RED),
+        runs: Vec::new(),
     }
 }
 
@@ -55,6 +56,7 @@ fn triangle() -> ExportMesh {
         normals: vec![[3.0, 0.0, 4.0], [0.0, 0.0, 0.0], [f32::NAN, 1.0, 0.0]],
         indices: vec![0, 1, 2],
         color: None,
+        runs: Vec::new(),
     }
 }
 
@@ -316,6 +318,42 @@ fn equal_colours_share_a_material_and_alpha_blends() {
 }
 
 #[test]
+fn colour_runs_are_primitives_sharing_the_vertices() {
+    let mut scene = assembly();
+    let blue = [0.1, 0.2, 0.9, 1.0];
+    // The quad's second triangle blue; the first keeps the mesh's red.
+    scene.meshes[0].runs = vec![(3, Some(blue))];
+    let bytes = to_glb_bytes(&scene).expect("encode");
+    let (doc, buffers, _) = gltf::import_slice(&bytes).expect("imports");
+    let mesh = doc.meshes().next().expect("mesh");
+    let prims: Vec<_> = mesh.primitives().collect();
+    assert_eq!(prims.len(), 2);
+    let mut seen = Vec::new();
+    for p in &prims {
+        let reader = p.reader(|b| Some(&buffers[b.index()]));
+        let indices: Vec<u32> = reader.read_indices().expect("indices").into_u32().collect();
+        let color = p.material().pbr_metallic_roughness().base_color_factor();
+        let position = p
+            .get(&gltf::Semantic::Positions)
+            .expect("positions")
+            .index();
+        seen.push((indices, color, position));
+    }
+    assert_eq!(seen[0].0, [0, 1, 2]);
+    assert_eq!(seen[0].1, RED);
+    assert_eq!(seen[1].0, [0, 2, 3]);
+    assert_eq!(seen[1].1, blue);
+    assert_eq!(seen[0].2, seen[1].2, "one POSITION accessor for both");
+    // Red, blue, and the default white of the assembly's other mesh.
+    assert_eq!(doc.materials().len(), 3);
+
+    // A run from index 0 leaves no primitive of the mesh's own colour.
+    scene.meshes[0].runs = vec![(0, Some(blue))];
+    let gltf = gltf::Gltf::from_slice(&to_glb_bytes(&scene).expect("encode")).expect("valid");
+    assert_eq!(gltf.meshes().next().expect("mesh").primitives().count(), 1);
+}
+
+#[test]
 fn meshes_without_normals_have_no_normal_attribute() {
     let mut scene = assembly();
     scene.meshes[1].normals.clear();
@@ -447,6 +485,25 @@ fn other_invalid_input_is_an_error() {
     scene.meshes[0].color = Some([1.5, 0.0, 0.0, 1.0]);
     assert!(matches!(
         write_fails("color", &scene),
+        GltfWriteError::InvalidColor { .. }
+    ));
+
+    for (tag, runs) in [
+        ("run-inside", vec![(1, None)]),
+        ("run-end", vec![(6, None)]),
+        ("run-order", vec![(3, None), (3, None)]),
+    ] {
+        let mut scene = assembly();
+        scene.meshes[0].runs = runs;
+        assert!(matches!(
+            write_fails(tag, &scene),
+            GltfWriteError::BadRun { mesh: 0, .. }
+        ));
+    }
+    let mut scene = assembly();
+    scene.meshes[0].runs = vec![(3, Some([0.0, f32::NAN, 0.0, 1.0]))];
+    assert!(matches!(
+        write_fails("run-color", &scene),
         GltfWriteError::InvalidColor { .. }
     ));
 
