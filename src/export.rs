@@ -245,7 +245,7 @@ pub fn assemble(scene: &Scene, opts: &ExportOptions) -> Result<ExportScene, Expo
                     t.patch(&local, eps, &mut m);
                     // A face or patch of another colour than the triangles before it
                     // starts a run (a primitive of its own).
-                    let color = p.color.map(|c| [c[0], c[1], c[2], 1.0]);
+                    let color = p.color.map(linear_color);
                     let current = mesh.runs.last().map_or(mesh.color, |r| r.1);
                     if mesh.indices.is_empty() {
                         mesh.color = color;
@@ -312,6 +312,25 @@ impl Tree {
     }
 }
 
+/// A patch's colour (sRGB, the space it is drawn in: `io::mesh` turns a glTF file's linear
+/// base colour into it, OBJ and STEP colours are sRGB) as glTF's base colour factor, which
+/// is linear (glTF 2.0, "Metallic-Roughness Material"), opaque.
+fn linear_color(c: [f32; 3]) -> [f32; 4] {
+    let [r, g, b] = c.map(|c| {
+        let c = if c.is_finite() {
+            c.clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
+        if c <= 0.040_45 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        }
+    });
+    [r, g, b, 1.0]
+}
+
 /// Appends the triangles of `m` with only the vertices they use: a trimmed face's mesh also
 /// holds vertices of the untrimmed surface that no triangle kept, which would stretch the
 /// bounds other tools compute from the vertices.
@@ -372,8 +391,7 @@ mod tests {
         let m = &doc.meshes[0];
         let colours: Vec<_> = m.primitives().map(|(_, c)| c.expect("coloured")).collect();
         let mut distinct: Vec<[u32; 4]> = (scene.patches.iter())
-            .map(|p| p.color.expect("coloured").map(f32::to_bits))
-            .map(|[r, g, b]| [r, g, b, 1f32.to_bits()])
+            .map(|p| linear_color(p.color.expect("coloured")).map(f32::to_bits))
             .collect();
         distinct.sort_unstable();
         distinct.dedup();
@@ -389,8 +407,7 @@ mod tests {
             let PatchSurface::Mesh(mesh) = &p.surface else {
                 panic!("a mesh patch");
             };
-            let c = p.color.expect("coloured");
-            let key = [c[0], c[1], c[2], 1.0].map(f32::to_bits);
+            let key = linear_color(p.color.expect("coloured")).map(f32::to_bits);
             let set = of_colour.entry(key).or_default();
             set.extend(
                 mesh.positions
@@ -403,6 +420,32 @@ mod tests {
             for &i in &m.indices[range] {
                 let v = m.positions[i as usize].map(f32::to_bits);
                 assert!(of_colour[&key].contains(&v), "vertex {i} of another colour");
+            }
+        }
+    }
+
+    /// The base colour factor is linear: a patch's sRGB colour is converted (and glTF's
+    /// reader converts it back: `io::mesh`).
+    #[test]
+    fn colours_are_written_linear() {
+        assert_eq!(linear_color([0.0, 1.0, 0.5]), [0.0, 1.0, 0.21404114, 1.0]);
+        assert_eq!(linear_color([f32::NAN, 2.0, -1.0]), [1.0, 1.0, 0.0, 1.0]);
+        let scene = load("alien.glb");
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("models/alien.glb");
+        let (doc, _, _) = gltf::import(path).expect("reads");
+        let original: Vec<[u32; 3]> = (doc.materials())
+            .map(|m| m.pbr_metallic_roughness().base_color_factor())
+            .map(|[r, g, b, _]| [r, g, b].map(|c| (c * 255.0).round() as u32))
+            .collect();
+        let out = assemble(&scene, &ExportOptions::default()).expect("assembles");
+        for m in &out.meshes {
+            for (_, c) in m.primitives() {
+                let c = c.expect("coloured").map(|c| (c * 255.0).round() as u32);
+                let c = [c[0], c[1], c[2]];
+                assert!(
+                    original.contains(&c),
+                    "{c:?} is none of the file's {original:?}"
+                );
             }
         }
     }

@@ -103,7 +103,8 @@ pub struct Patch {
     pub bounds: Sphere,
     /// Index into [`Scene::parts`].
     pub part: u32,
-    /// Colour from the file (linear RGB 0–1), when it has one.
+    /// Colour from the file (sRGB 0–1, the space it is drawn in: a glTF file's linear base
+    /// colour is converted on reading), when it has one.
     pub color: Option<[f32; 3]>,
     /// Index into [`Scene::instances`]: the placed solid or shell the patch belongs to.
     pub instance: u32,
