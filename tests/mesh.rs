@@ -177,6 +177,9 @@ fn bad_mesh_files_are_typed_errors_naming_the_file() {
         ("no_faces.ply", "no faces"),
         ("two_corners.ply", "face 0 has 2 corners"),
         ("huge_count.ply", "more than the file's"),
+        // The header's words inside a comment line do not end it (found by fuzzing: an
+        // out-of-memory abort).
+        ("huge_count_after_comment.ply", "more than the file's"),
         ("garbage.ply", "not a valid PLY"),
         ("truncated.ply", "not a valid PLY"),
     ];

@@ -25,7 +25,7 @@ OBJ's materials are primitives as trimesh reads them.
 
 With `--keep-parts` and more than one colour, each result is also measured colour by colour:
 the two-sided Hausdorff distance between its triangles of a colour and the original's of that
-colour (20 000 samples each way), the largest over the colours, printed as "colour regions"
+colour (10 000 samples each way), the largest over the colours, printed as "colour regions"
 (infinite when a colour is lost). Ours is certified within T there too (each of our patches
 is one colour, within T of its own original triangles), so beyond T it fails like the
 geometric bound; meshoptimizer's is printed beside it: at equal triangle counts it may move
@@ -132,7 +132,7 @@ def colour_regions(pieces):
             for k, gs in grouped.items()}
 
 
-def colour_error(regions, originals, frame, n=20000):
+def colour_error(regions, originals, frame, n=10000):
     """Largest two-sided Hausdorff distance (framed, as a fraction of the diagonal) between a
     simplified colour region and the original region of that colour; infinite when a colour
     is lost or appears. A simplified region's colour is the original colour nearest to it,
