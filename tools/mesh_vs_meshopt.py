@@ -146,17 +146,17 @@ def colour_error(regions, originals, frame, n=10000):
         best = min(near, default=(None, None))
         return best[0] is not None and best[0] <= 6, best[1]
 
-    matched = {}
+    pieces = []
     for key, g in regions.items():
         ok, k = match(key)
         if not ok:
             return float("inf")
-        matched.setdefault(k, []).append(g)
+        pieces.append((k, g))
+    matched = colour_regions(pieces)
     if set(matched) != set(originals):
         return float("inf")
     worst = 0.0
-    for k, gs in matched.items():
-        g = trimesh.util.concatenate(gs) if len(gs) > 1 else gs[0]
+    for k, g in matched.items():
         if len(g.faces) == 0:
             return float("inf")
         worst = max(worst, hausdorff(frame(g), frame(originals[k]), n) / FRAME_DIAGONAL)
@@ -268,12 +268,14 @@ def judge(model, rels, keep_parts, patchwork, max_ratio, known, mutate=0.0, name
                     keys = sorted(ours_regions)
                     ours_regions = {keys[(i + 1) % len(keys)]: ours_regions[k]
                                     for i, k in enumerate(keys)}
+                # meshoptimizer's triangles keep their primitive's vertices: a triangle's
+                # colour is its first vertex's.
                 faces = dst[:k].reshape(-1, 3)
-                theirs_regions = {}
-                for key in set(vertex_keys):
-                    mine = faces[[vertex_keys[f[0]] == key for f in faces]]
-                    if len(mine):
-                        theirs_regions[key] = trimesh.Trimesh(given.vertices, mine, process=False)
+                by_key = {}
+                for i, f in enumerate(faces):
+                    by_key.setdefault(vertex_keys[f[0]], []).append(i)
+                theirs_regions = {key: trimesh.Trimesh(given.vertices, faces[ix], process=False)
+                                  for key, ix in by_key.items()}
                 c_ours = colour_error(ours_regions, originals, frame)
                 c_theirs = colour_error(theirs_regions, originals, frame)
             # Distances within the float32 rounding of the input are no error of either: both
