@@ -8,7 +8,8 @@ For every relative tolerance rel (T = rel x the mesh's bounding-box diagonal):
 `patchwork export MODEL --tolerance T --unit model --up model --no-cache`, then meshoptimizer's
 `simplify` of the whole original mesh to the same triangle count, and each result's two-sided
 Hausdorff distance to the original (100 000 area-weighted surface samples plus every vertex,
-both ways, exact closest points through trimesh), printed relative to the diagonal with the
+both ways, each point's exact distance: tools/exact_distance.py, numpy and scipy's k-d tree,
+checked against trimesh's closest points by `--self-test`), printed relative to the diagonal with the
 ratio ours / meshopt. The original is read by trimesh itself (no code of ours between the
 file and the judge; node transforms applied, the model's own units and axes as `--unit model
 --up model` writes) and welded by position, so meshoptimizer sees one mesh without patch
@@ -43,9 +44,10 @@ direction before it is measured: a broken simplifier the judge must catch (CI ru
 requires exit 1).
 
 Distances are measured with the original's box centred and scaled to a diagonal of 1000
-(`FRAME_DIAGONAL`: trimesh's closest point fails on small triangles), and every model is
-first measured against itself: a measurement that puts the original off itself fails the run.
-`--self-test` checks that on the generated mesh that found the fault.
+(`FRAME_DIAGONAL`: trimesh's closest point, the judge's first measurement and now the
+self-test's reference, fails on small triangles), and every model is first measured against
+itself: a measurement that puts the original off itself fails the run. `--self-test` checks
+the measurement against trimesh's, framed, and shows trimesh's fault unframed.
 
 `--generate N [--gen-seed S] [--gen-start K]`: instead of MODEL, the seeded generator's meshes
 (`tools/mesh_generator.py`: inputs nobody chose) `mgen-S-K` .. `mgen-S-(K+N-1)`, each judged
@@ -64,6 +66,9 @@ import tempfile
 import numpy as np
 import trimesh
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import exact_distance  # noqa: E402
+
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
@@ -75,13 +80,11 @@ def load(path):
 
 
 def one_sided(a, b, n, seed):
+    """Largest distance from `a` (n area-weighted surface samples and every vertex) to `b`,
+    exact (tools/exact_distance.py)."""
     pts, _ = trimesh.sample.sample_surface(a, n, seed=seed)
     pts = np.vstack([pts, a.vertices[np.unique(a.faces)]])
-    worst = 0.0
-    for i in range(0, len(pts), 20000):
-        _, d, _ = trimesh.proximity.closest_point(b, pts[i:i + 20000])
-        worst = max(worst, float(d.max()))
-    return worst
+    return exact_distance.Mesh(b.triangles).farthest(pts)[0]
 
 
 def colour_key(geometry):
@@ -172,6 +175,7 @@ def hausdorff(a, b, n=100000):
 # absolute 1e-12, so on a model of millimetre-sized triangles given in metres it answered
 # 2.8e-4 for a point on the triangle itself (mgen-1-11, its diagonal 0.05): every distance is
 # taken at this one scale, and `judge` checks the measurement on the original against itself.
+# (tools/exact_distance.py has no such threshold; the frame keeps it comparable with trimesh.)
 FRAME_DIAGONAL = 1000.0
 
 
@@ -358,25 +362,71 @@ def judge_generated(args, rels, known):
 
 
 def self_test():
-    """`--self-test`: the measurement on the generated mesh that found trimesh's fault
-    (mgen-1-11, 0.05 wide): unframed, trimesh puts its own samples off it (the fault the frame
-    avoids, still there in the pinned trimesh); framed, they are on it. Exit 1 otherwise."""
-    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    """`--self-test`: the measurement checked against trimesh's closest points, on the
+    generated mesh that found trimesh's fault (mgen-1-11, 0.05 wide). Unframed, trimesh puts
+    the mesh's own samples off it (its fault, still there in the pinned trimesh) and
+    tools/exact_distance.py does not; framed, both find them on it. Then, framed, a copy of
+    the mesh with every vertex moved at random, and points scattered in a box three times
+    the mesh's size (far points: each one's nearest centroids are the loosest first bound):
+    every point's exact distance must equal trimesh's (1e-9 of the frame's diagonal), and the
+    largest found by the descending walk must equal trimesh's largest. Exit 1 otherwise."""
     import mesh_generator as gen
 
+    ok = True
     with tempfile.TemporaryDirectory() as tmp:
         orig = load(gen.write(gen.recipe(1, 11), os.path.join(tmp, "mgen-1-11")))
         orig.merge_vertices(merge_tex=True, merge_norm=True)
         diag = float(np.linalg.norm(orig.bounds[1] - orig.bounds[0]))
+        pts, _ = trimesh.sample.sample_surface(orig, 10000, seed=5)
+        _, d, _ = trimesh.proximity.closest_point(orig, pts)
+        raw_trimesh = float(d.max()) / diag
         raw = one_sided(orig, orig, 10000, 5) / diag
         centre = (orig.bounds[0] + orig.bounds[1]) / 2
         judged = framed(orig, centre, FRAME_DIAGONAL / diag)
         good = one_sided(judged, judged, 10000, 5) / FRAME_DIAGONAL
-    print(f"self-test: mgen-1-11 from itself: {raw:.3g} of its diagonal as given, {good:.3g} framed")
-    ok = raw > 1e-4 and good <= 1e-9
-    if not ok:
-        print("self-test FAILED: expected the unframed measurement wrong (trimesh's fault) and "
-              "the framed one right")
+        print(f"self-test: mgen-1-11 from itself as given: trimesh {raw_trimesh:.3g} of its "
+              f"diagonal, ours {raw:.3g}; framed {good:.3g}")
+        if not (raw_trimesh > 1e-4 and raw <= 1e-9 and good <= 1e-9):
+            ok = False
+            print("self-test FAILED: expected trimesh's fault unframed, and our measurement "
+                  "exact both ways")
+        rng = np.random.default_rng(7)
+        moved = trimesh.Trimesh(judged.vertices + rng.normal(0, 2.0, judged.vertices.shape),
+                                judged.faces, process=False)
+        near, _ = trimesh.sample.sample_surface(moved, 20000, seed=6)
+        far = rng.uniform(-1.5, 1.5, (5000, 3)) * (judged.bounds[1] - judged.bounds[0])
+        mesh = exact_distance.Mesh(judged.triangles)
+        for what, p in (("near", near), ("far", far)):
+            _, d, _ = trimesh.proximity.closest_point(judged, p)
+            each = mesh.exact(p, mesh.upper(p))
+            diff = float(np.abs(each - d).max())
+            top, measured = mesh.farthest(p)
+            print(f"self-test: {len(p)} {what} points: largest per-point difference from "
+                  f"trimesh {diff:.3g}; largest {top:.6g} (trimesh {d.max():.6g}), "
+                  f"{measured} measured in full")
+            if diff > 1e-9 * FRAME_DIAGONAL or abs(top - d.max()) > 1e-9 * FRAME_DIAGONAL:
+                ok = False
+                print(f"self-test FAILED: {what} points measured unlike trimesh")
+        # Loose first bounds: one large triangle and a cluster of tiny ones beside its far
+        # corner. 600 points just off that corner have tiny triangles as their nearest
+        # centroids (a first bound near 300, the truth near 1); one point 100 over the large
+        # triangle is the farthest; 2 000 points on it are 0 away. The walk must measure past
+        # the first batch (the loose points) to find it, and stop before the points on it.
+        big = np.array([[[0, 0, 0], [1000, 0, 0], [0, 1000, 0]]], dtype=float)
+        grid = rng.uniform(0, 20, (400, 1, 3)) + np.array([1000, 300, 50])
+        tiny = grid + rng.uniform(-0.5, 0.5, (400, 3, 3))
+        mesh = exact_distance.Mesh(np.concatenate([big, tiny]))
+        corner = np.column_stack([rng.uniform(980, 995, 600), rng.uniform(1, 5, 600),
+                                  rng.uniform(0.5, 1, 600)])
+        on = np.column_stack([rng.uniform(200, 400, (2000, 2)), np.zeros(2000)])
+        p = np.vstack([corner, [[300, 300, 100]], on])
+        top, measured = mesh.farthest(p)
+        print(f"self-test: loose first bounds: largest {top:.6g} (100 expected), "
+              f"{measured} of {len(p)} measured in full")
+        if abs(top - 100) > 1e-9 or measured >= len(p):
+            ok = False
+            print("self-test FAILED: the descending walk missed the farthest point or did not "
+                  "stop early")
     return 0 if ok else 1
 
 
