@@ -14,9 +14,10 @@
 //!   asks for in `default_view`.
 //!
 //! Guarantees: deterministic (instances, patches and meshes in scene order); the tolerance is
-//! checked first, so a bad one never starts tessellating. Not done: faces whose tessellation
-//! failed are left out silently (their [`PatchMesh::failure`] is not reported), and no mesh is
-//! de-duplicated beyond the `(part, shell)` key.
+//! checked first, so a bad one never starts tessellating. A face whose tessellation fails
+//! ([`PatchMesh::failure`]) is left out of its mesh and reported, once per mesh, by
+//! [`assemble_reporting`] (`patchwork export` warns). Not done: no mesh is de-duplicated
+//! beyond the `(part, shell)` key.
 
 use std::borrow::Cow;
 use std::collections::HashMap;
@@ -171,9 +172,30 @@ fn drawn<'a>(scene: &'a Scene, view: &View, tolerance: Tolerance) -> Vec<(Cow<'a
         .collect()
 }
 
+/// A face (or mesh patch) left out of an export: its tessellation failed.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LeftOut {
+    /// The patch's id in the scene.
+    pub patch: u32,
+    /// The name of the part whose mesh it is missing from.
+    pub part: String,
+    /// Why ([`PatchMesh::failure`]).
+    pub reason: String,
+}
+
 /// Tessellates `scene` into meshes (one per shell) and nodes (one per placement); see the
-/// module documentation.
+/// module documentation. Faces whose tessellation fails are left out: use
+/// [`assemble_reporting`] to learn which.
 pub fn assemble(scene: &Scene, opts: &ExportOptions) -> Result<ExportScene, ExportError> {
+    assemble_reporting(scene, opts).map(|(doc, _)| doc)
+}
+
+/// [`assemble`], with the faces left out because their tessellation failed (each once, in
+/// scene order, though a mesh several placements share is missing it in each).
+pub fn assemble_reporting(
+    scene: &Scene,
+    opts: &ExportOptions,
+) -> Result<(ExportScene, Vec<LeftOut>), ExportError> {
     let (Tolerance::PixelError(t) | Tolerance::Absolute(t)) = opts.tolerance;
     if !(t.is_finite() && t > 0.0) {
         return Err(ExportError::Tolerance(opts.tolerance));
@@ -202,6 +224,7 @@ pub fn assemble(scene: &Scene, opts: &ExportOptions) -> Result<ExportScene, Expo
         }
     }
     let mut meshes = Vec::new();
+    let mut left_out = Vec::new();
     let mut mesh_of = HashMap::new();
     let mut nodes = Vec::new();
     let mut t = Tessellators::new();
@@ -243,6 +266,13 @@ pub fn assemble(scene: &Scene, opts: &ExportOptions) -> Result<ExportScene, Expo
                     };
                     let mut m = PatchMesh::default();
                     t.patch(&local, eps, &mut m);
+                    if let Some(why) = &m.failure {
+                        left_out.push(LeftOut {
+                            patch: p.id,
+                            part: part_name.clone(),
+                            reason: why.clone(),
+                        });
+                    }
                     // A face or patch of another colour than the triangles before it
                     // starts a run (a primitive of its own).
                     let color = p.color.map(linear_color);
@@ -276,12 +306,13 @@ pub fn assemble(scene: &Scene, opts: &ExportOptions) -> Result<ExportScene, Expo
             parent: Some(parent),
         });
     }
-    Ok(ExportScene {
+    let doc = ExportScene {
         meshes,
         nodes,
         groups: tree.groups,
         generator: opts.generator.clone(),
-    })
+    };
+    Ok((doc, left_out))
 }
 
 /// The groups of the assembly tree, made as occurrence paths name them. Instance transforms
@@ -523,6 +554,50 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn a_face_that_fails_is_reported_left_out() {
+        // One face of the assembly given no loops: its tessellation fails (`NoLoops`).
+        let mut scene = load("as1-oc-214.stp");
+        let opts = ExportOptions {
+            tolerance: Tolerance::Absolute(0.5),
+            ..ExportOptions::default()
+        };
+        let (whole, none) = assemble_reporting(&scene, &opts).expect("assembles");
+        assert!(none.is_empty(), "{none:?}");
+        let k = (scene.patches.iter())
+            .position(|p| matches!(p.surface, PatchSurface::Trimmed(_)))
+            .expect("a trimmed face");
+        let PatchSurface::Trimmed(face) = &scene.patches[k].surface else {
+            unreachable!()
+        };
+        let mut broken = crate::model::trimmed::TrimmedFace::clone(face);
+        broken.loops.clear();
+        let broken = std::sync::Arc::new(broken);
+        let id = scene.patches[k].id;
+        // Every placement of that face (patches sharing its surface).
+        let same = face.clone();
+        for p in &mut scene.patches {
+            if let PatchSurface::Trimmed(f) = &p.surface
+                && std::sync::Arc::ptr_eq(f, &same)
+            {
+                p.surface = PatchSurface::Trimmed(broken.clone());
+            }
+        }
+        let (doc, left) = assemble_reporting(&scene, &opts).expect("assembles");
+        assert_eq!(left.len(), 1, "{left:?}");
+        assert_eq!(left[0].patch, id);
+        assert!(
+            left[0].reason.contains("no boundary loop"),
+            "{}",
+            left[0].reason
+        );
+        let part = &scene.parts[scene.patches[k].part as usize].name;
+        assert_eq!(&left[0].part, part);
+        // The rest is written as before.
+        assert!(triangles(&doc) < triangles(&whole));
+        assert_eq!(doc.nodes.len(), whole.nodes.len());
     }
 
     #[test]

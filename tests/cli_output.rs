@@ -316,6 +316,8 @@ fn exports_are_y_up_metres_with_the_tree() {
     ]);
     let v = json_of(&o);
     assert_eq!(v["unit"], "m");
+    // Every face of as1 tessellates: none left out (each would be listed, and warned about).
+    assert_eq!(v["left_out"], serde_json::json!([]));
     assert!(bin.is_file());
     let (doc2, _, _) = gltf::import(&gltf_path).expect("imports .gltf + .bin");
     assert_eq!(doc2.meshes().count(), doc.meshes().count());

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 use serde_json::json;
 
-use patchwork::export::{ExportOptions, Tolerance, assemble, metres_per_unit};
+use patchwork::export::{ExportOptions, Tolerance, assemble_reporting, metres_per_unit};
 use patchwork::io::gltf_out::{write_glb, write_gltf};
 use patchwork::io::stl_out::write_stl;
 use patchwork::model::{Scene, UpAxis};
@@ -14,7 +14,7 @@ use patchwork::view;
 
 use crate::args::pixel_error;
 use crate::error::CliError;
-use crate::out::{self, data};
+use crate::out::{self, data, note};
 use patchwork::prep::Hierarchies;
 
 #[derive(Args, Debug)]
@@ -154,7 +154,21 @@ pub fn run(args: &ExportArgs) -> Result<(), CliError> {
             .join(" + "),
         ..ExportOptions::default()
     };
-    let doc = assemble(&scene, &opts)?;
+    let (doc, left_out) = assemble_reporting(&scene, &opts)?;
+    // Faces whose tessellation failed are missing from the file: said, never silent.
+    if !left_out.is_empty() {
+        note!(
+            "warning: {} face(s) could not be tessellated and are left out of {}:",
+            left_out.len(),
+            args.output.display()
+        );
+        for l in left_out.iter().take(10) {
+            note!("  {} (part {}): {}", l.patch, l.part, l.reason);
+        }
+        if left_out.len() > 10 {
+            note!("  … and {} more", left_out.len() - 10);
+        }
+    }
     let (meshes, nodes, triangles, bytes) = match format {
         Format::Glb | Format::Gltf => {
             let stats = if format == Format::Glb {
@@ -188,6 +202,11 @@ pub fn run(args: &ExportArgs) -> Result<(), CliError> {
         "bytes": bytes,
         "unit": unit,
         "up": up_name,
+        "left_out": left_out.iter().map(|l| json!({
+            "patch": l.patch,
+            "part": l.part,
+            "reason": l.reason,
+        })).collect::<Vec<_>>(),
     }));
     data!(
         "{}: {meshes} meshes, {nodes} nodes, {} groups, {triangles} triangles, {bytes} bytes; \
