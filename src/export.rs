@@ -175,7 +175,7 @@ fn drawn<'a>(scene: &'a Scene, view: &View, tolerance: Tolerance) -> Vec<(Cow<'a
 /// A face (or mesh patch) left out of an export: its tessellation failed.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LeftOut {
-    /// The patch's id in the scene.
+    /// The patch's id in the scene (of the face's first placement, when several share it).
     pub patch: u32,
     /// The name of the part whose mesh it is missing from.
     pub part: String,
