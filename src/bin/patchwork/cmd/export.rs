@@ -14,7 +14,7 @@ use patchwork::view;
 
 use crate::args::pixel_error;
 use crate::error::CliError;
-use crate::out::{self, data, note};
+use crate::out::{self, data};
 use patchwork::prep::Hierarchies;
 
 #[derive(Args, Debug)]
@@ -156,19 +156,17 @@ pub fn run(args: &ExportArgs) -> Result<(), CliError> {
     };
     let (doc, left_out) = assemble_reporting(&scene, &opts)?;
     // Faces whose tessellation failed are missing from the file: said, never silent.
-    if !left_out.is_empty() {
-        note!(
-            "warning: {} face(s) could not be tessellated and are left out of {}:",
+    let lines: Vec<String> = (left_out.iter())
+        .map(|l| format!("{} (part {}): {}", l.patch, l.part, l.reason))
+        .collect();
+    super::warn_list(
+        &format!(
+            "{} face(s) could not be tessellated and are left out of {}",
             left_out.len(),
             args.output.display()
-        );
-        for l in left_out.iter().take(10) {
-            note!("  {} (part {}): {}", l.patch, l.part, l.reason);
-        }
-        if left_out.len() > 10 {
-            note!("  … and {} more", left_out.len() - 10);
-        }
-    }
+        ),
+        &lines,
+    );
     let (meshes, nodes, triangles, bytes) = match format {
         Format::Glb | Format::Gltf => {
             let stats = if format == Format::Glb {

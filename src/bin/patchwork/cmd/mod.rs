@@ -182,14 +182,24 @@ pub fn load_built(path: &Path, cache: &CacheArgs) -> Result<Scene, CliError> {
 /// Reports patches whose tessellation failed (their faces are not drawn in this frame).
 pub fn report_failures(meshes: &[PatchMesh]) {
     let failed: Vec<&str> = meshes.iter().filter_map(|m| m.failure.as_deref()).collect();
-    if !failed.is_empty() {
-        note!(
-            "warning: {} patch(es) could not be tessellated:",
-            failed.len()
-        );
-        for f in failed.iter().take(10) {
-            note!("  {f}");
-        }
+    warn_list(
+        &format!("{} patch(es) could not be tessellated", failed.len()),
+        &failed,
+    );
+}
+
+/// A warning `heading:` on stderr with the first ten `items` below it (and how many more);
+/// nothing when there are none.
+pub fn warn_list(heading: &str, items: &[impl std::fmt::Display]) {
+    if items.is_empty() {
+        return;
+    }
+    note!("warning: {heading}:");
+    for item in items.iter().take(10) {
+        note!("  {item}");
+    }
+    if items.len() > 10 {
+        note!("  … and {} more", items.len() - 10);
     }
 }
 
