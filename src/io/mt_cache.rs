@@ -47,7 +47,8 @@ use crate::mt::{MtHierarchy, MtParts};
 /// triangles split up to 10 times, not 6 (`mt::build::FAN_DEPTH`): other (tighter) errors.
 /// 16: the height bound's cover argument tries points off the fan triangle's centroid
 /// (`mt::bound::height_over`): other (tighter) errors.
-pub(crate) const FORMAT_VERSION: u32 = 16;
+/// 17: candidates tied on cost taken by their own distance (`mt::build`): other hierarchies.
+pub(crate) const FORMAT_VERSION: u32 = 17;
 
 const MAGIC: &[u8; 8] = b"PWMTCACH";
 const HEADER: usize = 8 + 4 + 16 + 8 + 16;

@@ -30,6 +30,8 @@ struct Candidate {
     /// The error the collapse is expected to have, a distance (see [`Builder::candidate`] and
     /// [`Builder::predict`]).
     cost: f64,
+    /// `cost` without the inherited errors: what breaks ties (a region's inherited error).
+    own: f64,
     from: u32,
     to: u32,
     stamp: (u32, u32),
@@ -40,9 +42,11 @@ struct Candidate {
 impl Eq for Candidate {}
 impl Ord for Candidate {
     fn cmp(&self, o: &Self) -> Ordering {
-        // Min-heap on cost; ties by vertex ids for reproducibility.
+        // Min-heap on cost; ties (candidates in a region whose inherited error is above their
+        // own) by their own distance, then by vertex ids for reproducibility.
         o.cost
             .total_cmp(&self.cost)
+            .then_with(|| o.own.total_cmp(&self.own))
             .then_with(|| (o.from, o.to).cmp(&(self.from, self.to)))
     }
 }
@@ -389,9 +393,10 @@ impl Builder {
     /// The cost is a distance, a cheap guess of the node error: the largest of the quadric
     /// error as a root mean square distance (the summed quadric over its weight), the distance
     /// from `from` to the fan the collapse would make, and the errors the collapse would
-    /// inherit (the node error is no lower: monotone). The inherited errors and the fan only
-    /// change with the triangles around `from`, without a new stamp, so they can be stale
-    /// (low) by the time the candidate is popped: [`Builder::predict`] checks it then.
+    /// inherit (the node error is no lower: monotone); ties go to the smallest own distance
+    /// (tests/generated_meshes.rs's flat tube). The inherited errors and the fan only change
+    /// with the triangles around `from`, without a new stamp, so they can be stale (low) by
+    /// the time the candidate is popped: [`Builder::predict`] checks it then.
     fn candidate(&self, from: u32, to: u32) -> Option<Candidate> {
         let (f, t) = (from as usize, to as usize);
         // Border vertices move only along the border, onto a border neighbour; border
@@ -413,10 +418,11 @@ impl Builder {
         let mut q = self.quadric[f];
         q.add(&self.quadric[t]);
         let (pf, pt) = (self.pos[f], self.pos[t]);
-        let mut cost = (q.eval(pt) / q.weight().max(1e-300)).sqrt();
+        let mut own = (q.eval(pt) / q.weight().max(1e-300)).sqrt();
+        let mut inherited = 0.0f64;
         let mut to_fan = f64::INFINITY;
         for &tr in &self.around[f] {
-            cost = cost.max(self.node_error[self.created_by[tr as usize] as usize]);
+            inherited = inherited.max(self.node_error[self.created_by[tr as usize] as usize]);
             let tri = self.tris[tr as usize];
             if !tri.contains(&to) {
                 let [a, b, c] = tri.map(|i| if i == from { pt } else { self.pos[i as usize] });
@@ -424,10 +430,11 @@ impl Builder {
             }
         }
         if to_fan.is_finite() {
-            cost = cost.max(to_fan);
+            own = own.max(to_fan);
         }
         Some(Candidate {
-            cost,
+            cost: own.max(inherited),
+            own,
             from,
             to,
             stamp: (self.stamp[f], self.stamp[t]),
