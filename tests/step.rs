@@ -1661,6 +1661,33 @@ fn a_vertex_off_two_arcs_is_healed_to_where_they_meet() {
     }
 }
 
+/// gen-7-13 (seed 7 model 13): a thread with a head, patterned three times. The measure
+/// rebuilt the thread flank's outer helix (edge #1384, 4.07 turns) with 2 of its turns: a
+/// chord across two turns has the curve's midpoint on it, and the midpoint was all it
+/// compared. Samples of the flank's mesh along the missing turns read as outside the trim by
+/// 1.73 ε (`stats` said 1.725 ε, 162 samples outside) where Open CASCADE's judge measured
+/// 0.48 T; rebuilt whole, the measure reads 0.48 ε too.
+#[test]
+fn the_measure_rebuilds_every_turn_of_a_helix_edge() {
+    let (scene, _) = healed_model("models/generated/gen-7-13.step.gz");
+    let tol = 0.755;
+    let meshes = tessellate_scene_tolerance(&scene, tol);
+    let faces = patchwork::check::fidelity::measure_meshes(&scene, &meshes);
+    assert!(
+        faces.iter().any(|(_, f)| f.face == 1378),
+        "face #1378 measured"
+    );
+    for (_, f) in &faces {
+        assert!(
+            f.ratio() <= 0.6 && f.outside == 0,
+            "face #{}: error/tol {} (outside {})",
+            f.face,
+            f.ratio(),
+            f.outside
+        );
+    }
+}
+
 /// gen-1-78c (seed 1 model 78 as OCCT built it in one of several builds on 2026-12-04, kept by
 /// `occt_fidelity --keep`): a cylinder face (#2035) of the offset box whose own edge curves lie
 /// 17.8 mm (11.6 ε) off its surface. The mesh follows the edges, and OCCT's judge, against the

@@ -9,8 +9,10 @@
 //!
 //! 1. `p` is projected onto the surface from scratch (no parameter from the tessellator), at
 //!    `uv`, with `d = |S(uv) − p|`;
-//! 2. the trim loops are rebuilt from the exact edge curves, sampled until their chords are
-//!    within ε/16, projected into parameter space and unwrapped across periodic seams;
+//! 2. the trim loops are rebuilt from the exact edge curves (8 equal steps per edge, each
+//!    split until the curve at its quarter points and midpoint is within ε/16 of the chord
+//!    and runs along it, its tangent within 60°: the midpoint alone missed whole turns of a
+//!    helix), projected into parameter space and unwrapped across periodic seams;
 //! 3. `uv` is inside the face by the even-odd rule over the loops when every loop closes in
 //!    parameter space; when a loop runs around a periodic surface (and would need closing
 //!    along a pole or the parameter range), by the side of the nearest boundary segment
