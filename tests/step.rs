@@ -1688,6 +1688,29 @@ fn the_measure_rebuilds_every_turn_of_a_helix_edge() {
     }
 }
 
+/// gen-7-13-8turns (gen-7-13's recipe with 8 turns): the tessellator cut each 8-turn helix
+/// edge of the thread in two and compared each half with its chord at its quarter points and
+/// midpoint, whole turns apart and all on the chord, so it drew two chords for 8 turns: the
+/// flanks 6.16 T off their faces by Open CASCADE's judge, 7.99 ε by `stats`. Measured by the
+/// fidelity measure (its own edge sampling, which follows every turn: `check::fidelity`).
+#[test]
+fn a_thread_of_eight_turns_is_drawn_along_every_turn() {
+    let (scene, _) = healed_model("models/generated/gen-7-13-8turns.step.gz");
+    let tol = 0.761;
+    let meshes = tessellate_scene_tolerance(&scene, tol);
+    let faces = patchwork::check::fidelity::measure_meshes(&scene, &meshes);
+    assert!(faces.len() >= 18, "{} faces measured", faces.len());
+    for (_, f) in &faces {
+        assert!(
+            f.ratio() <= 0.6 && f.outside == 0,
+            "face #{}: error/tol {} (outside {})",
+            f.face,
+            f.ratio(),
+            f.outside
+        );
+    }
+}
+
 /// gen-1-78c (seed 1 model 78 as OCCT built it in one of several builds on 2026-12-04, kept by
 /// `occt_fidelity --keep`): a cylinder face (#2035) of the offset box whose own edge curves lie
 /// 17.8 mm (11.6 ε) off its surface. The mesh follows the edges, and OCCT's judge, against the

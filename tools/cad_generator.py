@@ -111,7 +111,9 @@ def _base(rng, kind):
                 "pitch": round(R * rng.uniform(0.6, 1.2), 3), "turns": _r(rng, 1.5, 4, 2)}
     if kind == "thread":
         R = _r(rng, 3, 10)
-        return {"kind": kind, "R": R, "pitch": round(R * rng.uniform(0.25, 0.5), 3), "turns": _r(rng, 2, 5, 2),
+        # Up to 16 turns (5 until 2026-12-06): an edge of 8 turns or more, one B-spline, is
+        # where the tessellator's edge sampling aliased (gen-7-13-8turns).
+        return {"kind": kind, "R": R, "pitch": round(R * rng.uniform(0.25, 0.5), 3), "turns": _r(rng, 2, 16, 2),
                 "head": rng.random() < 0.6}
     if kind == "text":
         return {"kind": kind, "text": rng.choice(["CAD", "Patch", "a8Q", "OCCT", "R2-D2", "&%"]),

@@ -23,21 +23,69 @@ const NEED_MARGIN: f64 = 1.01;
 /// bisection from 8 doubled to 32; on the KiCad boards the borders were most of the triangles,
 /// `benches/occt_faces.rs`). Every piece is then checked at its 3 samples and halved while it
 /// deviates more than `tol`, as before.
+///
+/// A segment whose curve runs round its chord rather than along it is split however near the
+/// chord its samples lie ([`across_chord`]): a helix of 8 turns in two segments of 4 had every
+/// sample on its chord, and the thread's flank was drawn 6.2 T off its face.
 pub(super) fn polyline_params(e: &crate::model::trimmed::TrimEdge, tol: f64) -> (Vec<f64>, f64) {
-    let closed = e.is_closed();
-    let n0 = match (&e.curve, closed) {
+    let n0 = match (&e.curve, e.is_closed()) {
         (_, true) => 8,
         (crate::model::trimmed::Curve3D::Line(_), false) => 1,
         _ => 2,
     };
+    curve_params(|t| e.point(t), e.t0, e.t1, n0, tol)
+}
+
+/// Cosine of the largest angle between the curve's tangent at a sample and its segment's
+/// chord for the segment to count as running along its chord ([`across_chord`]): 60°. A
+/// segment within the tolerance of a circle of radius r turns at most 2·asin(√(2 tol / r))
+/// between its ends, well under this wherever r is over a few tolerances.
+const ALONG_CHORD_COS: f64 = 0.5;
+
+/// Whether the curve at parameter `t` (in a segment with chord `pa..pb`) runs across the
+/// chord: its tangent (a central difference over 10⁻³ of the segment `h`) more than 60° from
+/// the chord's direction, on a chord longer than `tol`. Samples alone cannot tell a straight
+/// segment from one across whole turns of a helix: there every sample lies on the chord.
+fn across_chord(
+    point: &impl Fn(f64) -> DVec3,
+    t: f64,
+    h: f64,
+    pa: DVec3,
+    pb: DVec3,
+    tol: f64,
+) -> bool {
+    let chord = pb - pa;
+    let len = chord.length();
+    let tangent = point(t + 1e-3 * h) - point(t - 1e-3 * h);
+    let scale = tangent.length() * len;
+    len > tol && scale > 0.0 && tangent.dot(chord).abs() < ALONG_CHORD_COS * scale
+}
+
+/// [`polyline_params`] for the curve `point` from `t0` to `t1`, cut into `n0` first.
+fn curve_params(
+    point: impl Fn(f64) -> DVec3,
+    t0: f64,
+    t1: f64,
+    n0: usize,
+    tol: f64,
+) -> (Vec<f64>, f64) {
+    // A segment across its chord counts as deviating by half the chord's length (split; it
+    // asks for the pieces a deviation that large would).
     let deviation = |a: f64, b: f64| {
-        let (pa, pb) = (e.point(a), e.point(b));
+        let (pa, pb) = (point(a), point(b));
         [0.25, 0.5, 0.75]
             .iter()
-            .map(|f| dist_to_segment(e.point(a + (b - a) * f), pa, pb))
+            .map(|f| {
+                let t = a + (b - a) * f;
+                let d = dist_to_segment(point(t), pa, pb);
+                match across_chord(&point, t, b - a, pa, pb, tol) {
+                    true => d.max(0.5 * pa.distance(pb)),
+                    false => d,
+                }
+            })
             .fold(0.0, f64::max)
     };
-    let at = |i: usize, n: usize| e.t0 + (e.t1 - e.t0) * i as f64 / n as f64;
+    let at = |i: usize, n: usize| t0 + (t1 - t0) * i as f64 / n as f64;
     // Pieces each initial segment asks for (a NaN deviation asks for none, as before).
     let need: Vec<f64> = (0..n0)
         .map(|i| {
@@ -55,7 +103,7 @@ pub(super) fn polyline_params(e: &crate::model::trimmed::TrimEdge, tol: f64) -> 
     let weight: Vec<f64> = need.iter().map(|w| w + 1e-3).collect();
     let total: f64 = weight.iter().sum();
     let mut ends = Vec::with_capacity(pieces + 1);
-    ends.push(e.t0);
+    ends.push(t0);
     let (mut seg, mut below) = (0usize, 0.0f64);
     for k in 1..pieces {
         let target = total * k as f64 / pieces as f64;
@@ -66,8 +114,8 @@ pub(super) fn polyline_params(e: &crate::model::trimmed::TrimEdge, tol: f64) -> 
         let f = ((target - below) / weight[seg]).clamp(0.0, 1.0);
         ends.push(at(seg, n0) + (at(seg + 1, n0) - at(seg, n0)) * f);
     }
-    ends.push(e.t1);
-    let mut out = vec![e.t0];
+    ends.push(t1);
+    let mut out = vec![t0];
     let mut worst = 0.0f64;
     // Stack of segments to examine, in reverse order so they pop in order.
     let mut stack: Vec<(f64, f64, usize)> =
@@ -557,5 +605,62 @@ impl TrimmedTessellator {
             }
         }
         Ok(pts)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A helix of `turns` turns of radius `r` and pitch `pitch`, by turns.
+    fn helix(r: f64, pitch: f64) -> impl Fn(f64) -> DVec3 {
+        move |t: f64| {
+            let a = std::f64::consts::TAU * t;
+            DVec3::new(r * a.cos(), r * a.sin(), pitch * t)
+        }
+    }
+
+    /// Largest distance from the curve (densely sampled) to the polyline through `ts`.
+    fn gap(point: &impl Fn(f64) -> DVec3, ts: &[f64]) -> f64 {
+        let (a, b) = (ts[0], ts[ts.len() - 1]);
+        (0..=8000)
+            .map(|i| {
+                let p = point(a + (b - a) * i as f64 / 8000.0);
+                ts.windows(2)
+                    .map(|w| dist_to_segment(p, point(w[0]), point(w[1])))
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .fold(0.0, f64::max)
+    }
+
+    /// A thread's edge of 8 turns (and 16) cut in two: every sample of each half (its
+    /// quarter points and midpoint, whole turns along) lies on its chord. The tangents there
+    /// run round it, so the halves are split and the polyline follows every turn (without
+    /// `across_chord`: 2 chords, 5.9 off the helix).
+    #[test]
+    fn an_edge_across_whole_turns_of_a_helix_is_followed() {
+        let (r, pitch, tol) = (5.863, 2.013, 0.38);
+        let point = helix(r, pitch);
+        for turns in [8.0, 16.0] {
+            let (ts, dev) = curve_params(&point, 0.0, turns, 2, tol);
+            let g = gap(&point, &ts);
+            assert!(
+                g <= 1.05 * tol,
+                "{turns} turns: {g} off ({} points)",
+                ts.len()
+            );
+            assert!(dev <= tol, "{turns} turns: deviation {dev}");
+        }
+        // A circle's chords within the tolerance are not split for their tangents: the
+        // count its sagitta asks for, as before.
+        let circle = helix(r, 0.0);
+        let (ts, _) = curve_params(&circle, 0.0, 1.0, 8, tol);
+        let sagitta = |n: usize| r * (1.0 - (std::f64::consts::PI / n as f64).cos());
+        let need = (3..).find(|&n| sagitta(n) <= tol).unwrap_or(3);
+        assert!(
+            ts.len() - 1 <= 2 * need,
+            "{} pieces for a circle needing {need}",
+            ts.len() - 1
+        );
     }
 }
