@@ -173,7 +173,28 @@ fn locate(curve: &Curve3D, p: DVec3, range: Option<(f64, f64)>, tol: f64) -> Opt
     let d = vec_to_dvec(curve.der(t0));
     let t = t0 + (p - to_dvec(curve.subs(t0))).dot(d) / d.length_squared().max(1e-300);
     let t = newton_nearest(curve, p, t);
+    if on(t) {
+        return Some(t);
+    }
+    // A curve with a nearest point per turn (a thread's helix of 8 turns and more: both
+    // searches above ended on another turn, and the edges of generated models gen-8-27 and
+    // gen-10-10 were skipped): Newton from the nearest of dense samples.
+    let (a, b) = range?;
+    let t = newton_nearest(curve, p, nearest_sample(curve, p, a, b, LOCATE_SAMPLES)?);
     on(t).then_some(t)
+}
+
+/// Samples of a curve's range [`locate`] falls back on: 16 per turn of a 64-turn helix.
+const LOCATE_SAMPLES: usize = 1024;
+
+/// The parameter of the sample of `curve` nearest `p` among `n + 1` equally spaced over
+/// `a..b`, `None` when none is finite.
+fn nearest_sample(curve: &Curve3D, p: DVec3, a: f64, b: f64, n: usize) -> Option<f64> {
+    let dist = |t: f64| to_dvec(curve.subs(t)).distance_squared(p);
+    (0..=n)
+        .map(|i| a + (b - a) * i as f64 / n as f64)
+        .filter(|&t| dist(t).is_finite())
+        .min_by(|&s, &t| dist(s).total_cmp(&dist(t)))
 }
 
 /// The parameter of the point of a hyperbola (`cosh t, sinh t` placed) or a parabola
@@ -219,7 +240,7 @@ fn newton_nearest(curve: &Curve3D, p: DVec3, mut t: f64) -> f64 {
 }
 
 /// The point of `curve` nearest `p`, as a kernel projects a vertex onto its edge's curve to
-/// heal an edge whose vertex lies off it: the nearest of 129 samples over the curve's range
+/// heal an edge whose vertex lies off it: the nearest of 1 025 samples over the curve's range
 /// (one period of a periodic curve), refined by Newton inside the range; on an unbounded
 /// curve (a line), Newton from the start. `None` when it is not finite.
 pub(crate) fn nearest_on_curve(curve: &Curve3D, p: DVec3) -> Option<DVec3> {
@@ -230,11 +251,7 @@ pub(crate) fn nearest_on_curve(curve: &Curve3D, p: DVec3) -> Option<DVec3> {
     let dist = |t: f64| to_dvec(curve.subs(t)).distance_squared(p);
     let t = match range {
         Some((a, b)) => {
-            const N: usize = 128;
-            let best = (0..=N)
-                .map(|i| a + (b - a) * i as f64 / N as f64)
-                .filter(|&t| dist(t).is_finite())
-                .min_by(|&s, &t| dist(s).total_cmp(&dist(t)))?;
+            let best = nearest_sample(&curve, p, a, b, LOCATE_SAMPLES)?;
             let t = newton_nearest(&curve, p, best);
             let inside = curve.period().is_some() || (a.min(b)..=a.max(b)).contains(&t);
             if inside && dist(t) <= dist(best) {
