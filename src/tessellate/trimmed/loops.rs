@@ -37,9 +37,9 @@ pub(super) fn polyline_params(e: &crate::model::trimmed::TrimEdge, tol: f64) -> 
 }
 
 /// Cosine of the largest angle between the curve's tangent at a sample and its segment's
-/// chord for the segment to count as running along its chord ([`across_chord`]): 60°. A
-/// segment within the tolerance of a circle of radius r turns at most 2·asin(√(2 tol / r))
-/// between its ends, well under this wherever r is over a few tolerances.
+/// chord for the segment to count as running along its chord ([`across_chord`]): 60°. On a
+/// segment within the tolerance of a circle of radius r the tangent is at most
+/// acos(1 − tol / r) off the chord: under 60° wherever r is over 2 tol.
 const ALONG_CHORD_COS: f64 = 0.5;
 
 /// Whether the curve at parameter `t` (in a segment with chord `pa..pb`) runs across the
