@@ -1670,7 +1670,7 @@ fn a_vertex_off_two_arcs_is_healed_to_where_they_meet() {
 /// 0.48 T; rebuilt whole, the measure reads 0.48 ε too.
 #[test]
 fn the_measure_rebuilds_every_turn_of_a_helix_edge() {
-    let faces = measured_within("models/generated/gen-7-13.step.gz", 0.755, 42);
+    let faces = measured_within("models/generated/gen-7-13.step.gz", 0.755, 42, 0.6);
     assert!(
         faces.iter().any(|(_, f)| f.face == 1378),
         "face #1378 measured"
@@ -1684,7 +1684,7 @@ fn the_measure_rebuilds_every_turn_of_a_helix_edge() {
 /// fidelity measure (its own edge sampling, which follows every turn: `check::fidelity`).
 #[test]
 fn a_thread_of_eight_turns_is_drawn_along_every_turn() {
-    measured_within("models/generated/gen-7-13-8turns.step.gz", 0.761, 54);
+    measured_within("models/generated/gen-7-13-8turns.step.gz", 0.761, 54, 0.6);
 }
 
 /// gen-8-27 (seed 8 model 27 as OCCT built it, kept by `occt_fidelity --keep`): a thread of
@@ -1695,20 +1695,42 @@ fn a_thread_of_eight_turns_is_drawn_along_every_turn() {
 /// missing). Located from dense samples, every face is drawn within its tolerance.
 #[test]
 fn vertices_on_a_many_turn_helix_are_located_on_their_turn() {
-    measured_within("models/generated/gen-8-27.step.gz", 0.833, 45);
+    measured_within("models/generated/gen-8-27.step.gz", 0.833, 45, 0.6);
+}
+
+/// gen-2-47 (seed 2 model 47 reduced to one part: a revolved profile fused with a torus and
+/// cut by a cone): the torus face #982's seam meridian is split by a lens-shaped hole into
+/// edge #1010, a 0.19° arc (1.9e-5 m) from the seam's corner, and #1209. truck trims the
+/// circle to that arc, but its ends lay within the vertex tolerance (1e-4) of each other, so
+/// the arc was taken for a whole circle and its vertices located on it: the start fell at 2π,
+/// the end at 0.0034, and the edge ran the long way round over #1209's half of the seam. The
+/// tessellator then filled another region than the loops bound: 4 767 of 6 916 samples of the
+/// face's mesh outside its trim, Open CASCADE's judge 45 T.
+#[test]
+fn a_tiny_seam_arc_is_not_taken_the_long_way_round() {
+    let faces = measured_within("models/generated/gen-2-47.step.gz", 0.263, 9, 1.0);
+    assert!(
+        faces.iter().any(|(_, f)| f.face == 982),
+        "face #982 measured"
+    );
 }
 
 /// `path` (no face skipped) tessellated to `tol` as `stats --tolerance` does and measured face
-/// by face (`check::fidelity`): at least `patches` measured, each within 0.6 `tol`, no sample
+/// by face (`check::fidelity`): at least `patches` measured, each within `max_ratio` `tol`, no sample
 /// outside its trim and none of the face uncovered.
-fn measured_within(path: &str, tol: f64, patches: usize) -> Vec<(u32, FaceFidelity)> {
+fn measured_within(
+    path: &str,
+    tol: f64,
+    patches: usize,
+    max_ratio: f64,
+) -> Vec<(u32, FaceFidelity)> {
     let (scene, _) = healed_model(path);
     let meshes = tessellate_scene_tolerance(&scene, tol);
     let faces = patchwork::check::fidelity::measure_meshes(&scene, &meshes);
     assert!(faces.len() >= patches, "{} patches measured", faces.len());
     for (_, f) in &faces {
         assert!(
-            f.ratio() <= 0.6 && f.outside == 0 && f.uncovered == 0,
+            f.ratio() <= max_ratio && f.outside == 0 && f.uncovered == 0,
             "face #{}: error/tol {} (outside {}, uncovered {})",
             f.face,
             f.ratio(),

@@ -67,9 +67,16 @@ impl TrimEdge {
         let range = curve_range(&curve).filter(|(a, b)| a.is_finite() && b.is_finite());
         // Where both ends of the range are one point (a whole circle), an open edge is
         // located, never taken for the whole range (a tiny arc at the seam is not a whole
-        // circle); a trimmed range's ends are the edge's as before.
+        // circle); a trimmed range's ends are the edge's as before. A range that is itself
+        // shorter than the tolerance (truck trims a circle to its edge's vertices: a 0.19°
+        // arc at a torus's seam, generated model 2-47) is the edge: located, its vertices
+        // fell on either side of the circle's seam and the edge ran the long way round.
         let range_ends = range.map(|(a, b)| (a, b, to_dvec(curve.subs(a)), to_dvec(curve.subs(b))));
-        let ends = range_ends.filter(|&(_, _, pa, pb)| closed || pa.distance(pb) > tol);
+        let ends = range_ends.filter(|&(a, b, pa, pb)| {
+            closed
+                || pa.distance(pb) > tol
+                || to_dvec(curve.subs(0.5 * (a + b))).distance(pa) <= tol
+        });
         let mut wrap = None;
         let (t0, t1) = match ends {
             Some((a, b, pa, pb)) if pa.distance(start) <= tol && pb.distance(end) <= tol => (a, b),
