@@ -41,7 +41,7 @@ use crate::model::{Sphere, TrimmedFace};
 use edge::{
     EDGE_VERTEX_TOLERANCE, Fit, LOOSE_EDGE_FRACTION, LOOSE_UNCERTAINTY_FACTOR, convert_edge,
 };
-use whole::{seam_clear_of, whole_surface_loop};
+use whole::{is_sphere, loops_are_holes, seam_clear_of, whole_surface_loop};
 
 /// A STEP file read: every face of the shells used, converted (not yet probed: see
 /// [`crate::prep::step`]), with the product structure that places them.
@@ -605,13 +605,16 @@ fn convert_face(
         // Bounded as a kernel bounds it: its seam meridian, once each way (ShapeFix adds the
         // seam and the degenerate pole edges; the poles are points here).
         loops = whole_surface_loop(&surface, id, 0.0).into_iter().collect();
-    } else if vertex_bound
+    } else if (vertex_bound || is_sphere(&surface))
         && let Some(seam) = seam_clear_of(&surface, &loops)
+        && (vertex_bound || loops_are_holes(&surface, &loops, face.same_sense))
         && let Some(whole) = whole_surface_loop(&surface, id, seam)
     {
         // A VERTEX_LOOP at a pole beside edge loops none of which runs around the surface:
         // they are holes in the whole sphere (a sphere cut by small features), which reaches
-        // the pole. Without the whole surface's loop the holes alone were drawn.
+        // the pole. Without the whole surface's loop the holes alone were drawn. Without a
+        // VERTEX_LOOP, the loops' orientation says whether they are holes (a sphere cut by a
+        // wedge, its edges at the poles filleted: generated model gen-3-15).
         loops.insert(0, whole);
     }
     if loops.is_empty() {

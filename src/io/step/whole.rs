@@ -3,74 +3,167 @@
 
 use std::sync::Arc;
 
+use std::f64::consts::TAU;
+
 use crate::model::trimmed::{LoopEdge, TruckSurface};
 
 /// Ids of the seam edges made for whole faces (above any STEP entity id a file can hold in
 /// f64-exact integers: `WHOLE_FACE_EDGE + 4 · face + side`).
 const WHOLE_FACE_EDGE: u64 = 1 << 56;
 
-/// Where a sphere's seam can run clear of holes: the u of the middle of the widest gap
-/// between the loops' points seen around the sphere's axis (its poles are the ends of its v
-/// range; 16 points per edge). `None` when a loop runs around the axis (it bounds a cap, not
-/// a hole) or the surface has no v range.
-pub(super) fn seam_clear_of(surface: &TruckSurface, loops: &[Vec<LoopEdge>]) -> Option<f64> {
-    use crate::model::trimmed::{SurfaceEval, parameter_bounds};
-    use glam::DVec2;
-    let tau = std::f64::consts::TAU;
-    let (v0, v1) = parameter_bounds(surface).1?;
-    let (south, north) = (
-        surface.point(DVec2::new(0.0, v0)),
-        surface.point(DVec2::new(0.0, v1)),
-    );
-    let centre = 0.5 * (south + north);
-    let axis = (north - south).try_normalize()?;
-    let mid = 0.5 * (v0 + v1);
-    let x = (surface.point(DVec2::new(0.0, mid)) - centre)
-        .reject_from_normalized(axis)
-        .try_normalize()?;
-    let mut y = axis.cross(x);
-    // u runs with the angle about the axis or against it.
-    if (surface.point(DVec2::new(0.1, mid)) - centre).dot(y) < 0.0 {
-        y = -y;
+/// A sphere's frame for angles about its axis: centre, axis (south to north pole, the way v
+/// runs) and the directions of angle 0 and of a quarter turn the way u runs.
+struct AxisFrame {
+    centre: glam::DVec3,
+    axis: glam::DVec3,
+    x: glam::DVec3,
+    y: glam::DVec3,
+    size: f64,
+}
+
+impl AxisFrame {
+    fn of(surface: &TruckSurface) -> Option<AxisFrame> {
+        use crate::model::trimmed::{SurfaceEval, parameter_bounds};
+        use glam::DVec2;
+        let (v0, v1) = parameter_bounds(surface).1?;
+        let (south, north) = (
+            surface.point(DVec2::new(0.0, v0)),
+            surface.point(DVec2::new(0.0, v1)),
+        );
+        let centre = 0.5 * (south + north);
+        let axis = (north - south).try_normalize()?;
+        let mid = 0.5 * (v0 + v1);
+        let x = (surface.point(DVec2::new(0.0, mid)) - centre)
+            .reject_from_normalized(axis)
+            .try_normalize()?;
+        let mut y = axis.cross(x);
+        // u runs with the angle about the axis or against it.
+        if (surface.point(DVec2::new(0.1, mid)) - centre).dot(y) < 0.0 {
+            y = -y;
+        }
+        let size = north.distance(south);
+        Some(AxisFrame {
+            centre,
+            axis,
+            x,
+            y,
+            size,
+        })
     }
-    let size = north.distance(south);
-    let mut all = Vec::new();
-    for lp in loops {
-        let mut angles = Vec::new();
+
+    /// A loop's points (16 per edge, in the loop's direction) as (angle about the axis in
+    /// 0..2π, latitude), both increasing the way the surface's u and v do; points on the axis
+    /// (a pole: no angle) are left out.
+    fn loop_angles(&self, lp: &[LoopEdge]) -> Vec<(f64, f64)> {
+        let mut out = Vec::new();
         for le in lp {
             let e = &le.edge;
             for k in 0..16 {
                 let f = k as f64 / 16.0;
                 let f = if le.forward { f } else { 1.0 - f };
-                let d = e.point(e.t0 + (e.t1 - e.t0) * f) - centre;
-                // A point on the axis (a pole) has no angle.
-                if d.reject_from_normalized(axis).length() > 1e-9 * size {
-                    angles.push(d.dot(y).atan2(d.dot(x)).rem_euclid(tau));
+                let d = e.point(e.t0 + (e.t1 - e.t0) * f) - self.centre;
+                let across = d.reject_from_normalized(self.axis).length();
+                if across > 1e-9 * self.size {
+                    let angle = d.dot(self.y).atan2(d.dot(self.x)).rem_euclid(TAU);
+                    out.push((angle, d.dot(self.axis).atan2(across)));
                 }
             }
         }
-        let first = *angles.first()?;
-        let turn: f64 = angles
-            .iter()
-            .zip(angles.iter().skip(1).chain(std::iter::once(&first)))
-            .map(|(a, b)| {
-                let d = (b - a).rem_euclid(tau);
-                if d > 0.5 * tau { d - tau } else { d }
-            })
-            .sum();
-        if (turn / tau).round() != 0.0 {
+        out
+    }
+}
+
+/// Steps between consecutive angles of a closed loop, each taken the short way round.
+fn angle_steps(angles: &[(f64, f64)]) -> impl Iterator<Item = f64> + '_ {
+    angles
+        .iter()
+        .zip(angles.iter().skip(1).chain(angles.first()))
+        .map(move |(a, b)| {
+            let d = (b.0 - a.0).rem_euclid(TAU);
+            if d > 0.5 * TAU { d - TAU } else { d }
+        })
+}
+
+/// Where a sphere's seam can run clear of holes: the u of the middle of the widest gap
+/// between the loops' points seen around the sphere's axis (its poles are the ends of its v
+/// range; 16 points per edge). `None` when a loop runs around the axis (it bounds a cap, not
+/// a hole) or the surface has no v range.
+pub(super) fn seam_clear_of(surface: &TruckSurface, loops: &[Vec<LoopEdge>]) -> Option<f64> {
+    let frame = AxisFrame::of(surface)?;
+    let mut all = Vec::new();
+    for lp in loops {
+        let angles = frame.loop_angles(lp);
+        angles.first()?;
+        let turn: f64 = angle_steps(&angles).sum();
+        if (turn / TAU).round() != 0.0 {
             return None;
         }
-        all.extend(angles);
+        all.extend(angles.iter().map(|a| a.0));
     }
     all.sort_by(f64::total_cmp);
     let first = *all.first()?;
     let (gap, at) = all
         .iter()
-        .zip(all.iter().skip(1).chain(std::iter::once(&(first + tau))))
+        .zip(all.iter().skip(1).chain(std::iter::once(&(first + TAU))))
         .map(|(a, b)| (b - a, 0.5 * (a + b)))
         .max_by(|a, b| a.0.total_cmp(&b.0))?;
-    (gap > 0.0).then_some(at.rem_euclid(tau))
+    (gap > 0.0).then_some(at.rem_euclid(TAU))
+}
+
+/// Whether a sphere face's loops, none running around the axis ([`seam_clear_of`]), are all
+/// holes by their orientation: the face lies outside them, on the rest of the sphere. Their
+/// signed areas in (angle, latitude), which run as the surface's (u, v), add up to the side
+/// the face is on: with the face left of its loops (`domain_left`), an outer loop runs
+/// counter-clockwise and outweighs its holes; here the sum says clockwise. Generated model
+/// gen-3-15: a sphere of 296° whose edges at the poles are fillets has one loop (the two
+/// meridians of its cut and the fillet arcs), and the even-odd rule alone drew the 64° wedge
+/// the loop encloses in (u, v), the complement of the face.
+pub(super) fn loops_are_holes(
+    surface: &TruckSurface,
+    loops: &[Vec<LoopEdge>],
+    domain_left: bool,
+) -> bool {
+    let Some(frame) = AxisFrame::of(surface) else {
+        return false;
+    };
+    let angles: Vec<Vec<(f64, f64)>> = loops.iter().map(|lp| frame.loop_angles(lp)).collect();
+    // A loop through a pole (a point left out: a sphere's lune, generated models gen-1-9 and
+    // gen-1-12) may run along the pole either way round in u, and a step of a quarter turn
+    // or more cannot be told from its other way round: the orientation is not read then.
+    let clear = loops.iter().zip(&angles).all(|(lp, pts)| {
+        pts.len() == 16 * lp.len() && angle_steps(pts).all(|d| d.abs() < 0.25 * TAU)
+    });
+    if !clear {
+        return false;
+    }
+    let area: f64 = angles
+        .iter()
+        .map(|pts| {
+            // Unwrapped along the loop (it does not run around the axis: it closes).
+            let mut angle = pts.first().map_or(0.0, |p| p.0);
+            let unwrapped: Vec<(f64, f64)> = std::iter::once(angle)
+                .chain(angle_steps(&pts).map(|d| {
+                    angle += d;
+                    angle
+                }))
+                .zip(pts.iter().map(|p| p.1))
+                .take(pts.len())
+                .collect();
+            0.5 * unwrapped
+                .iter()
+                .zip(unwrapped.iter().skip(1).chain(unwrapped.first()))
+                .map(|(a, b)| a.0 * b.1 - b.0 * a.1)
+                .sum::<f64>()
+        })
+        .sum();
+    let facing = if domain_left { area } else { -area };
+    facing < 0.0
+}
+
+/// Whether `surface` is a sphere (the one surface [`whole_surface_loop`] bounds).
+pub(super) fn is_sphere(surface: &TruckSurface) -> bool {
+    use truck_stepio::r#in::alias::ElementarySurface;
+    matches!(surface, TruckSurface::ElementarySurface(e) if matches!(**e, ElementarySurface::Sphere(_)))
 }
 
 /// The loop bounding the whole of a sphere (face `face`): its parameter rectangle without the
@@ -83,11 +176,7 @@ pub(super) fn whole_surface_loop(
     seam: f64,
 ) -> Option<Vec<LoopEdge>> {
     use crate::model::trimmed::{SurfaceEval, parameter_bounds, parameter_rectangle};
-    use truck_stepio::r#in::alias::ElementarySurface;
-    let TruckSurface::ElementarySurface(e) = surface else {
-        return None;
-    };
-    if !matches!(**e, ElementarySurface::Sphere(_)) {
+    if !is_sphere(surface) {
         return None;
     }
     let (ru, rv) = parameter_bounds(surface);
