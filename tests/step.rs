@@ -1327,11 +1327,7 @@ fn a_sphere_face_outside_its_only_loop_is_drawn_outside_it() {
     let (m, eps) = face_mesh(&scene, 35);
     let r = 10.15f64;
     let (cut_from, cut_to) = (5.172f64, std::f64::consts::TAU);
-    let mut area = 0.0f64;
-    for tri in &m.triangles {
-        let [a, b, c] = tri.map(|i| m.positions[i as usize].as_dvec3());
-        area += (b - a).cross(c - a).length() / 2.0;
-    }
+    let area = f64::from(area_and_box(&m).0);
     for p in &m.positions {
         let p = p.as_dvec3();
         // The fillet arcs lie up to 0.021 off the sphere (the edges as OCCT wrote them).
@@ -1363,11 +1359,7 @@ fn a_sphere_lune_through_both_poles_is_drawn_as_the_lune() {
     let (m, eps) = face_mesh(&scene, 35);
     let r = 11.424f64;
     let span = 195.864f64.to_radians();
-    let mut area = 0.0f64;
-    for tri in &m.triangles {
-        let [a, b, c] = tri.map(|i| m.positions[i as usize].as_dvec3());
-        area += (b - a).cross(c - a).length() / 2.0;
-    }
+    let area = f64::from(area_and_box(&m).0);
     for p in &m.positions {
         let p = p.as_dvec3();
         assert!((p.length() - r).abs() <= 1e-3 * r, "{p} off the sphere");
