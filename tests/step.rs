@@ -1377,6 +1377,37 @@ fn a_sphere_lune_through_both_poles_is_drawn_as_the_lune() {
     );
 }
 
+/// gen-4-17-cone (seed 4 model 17 reduced to its first part, a wide cone shelled inwards by
+/// 1.048): the inner cone face #162 has one loop, its small circle (radius 3.464) and the
+/// seam out to a vertex at radius 43.207, with no edge round the wide end. The tessellator
+/// closed the loop at the cone's apex, so it drew the disc inside the small circle and a
+/// sliver along the seam, not the band out to the seam's end (`stats` 800 ε; Open CASCADE's
+/// judge a 2.83 T, b 2.65 T, and on the whole model the judge passed, the outer cone a shell
+/// thickness away standing in for it). Judged by the frustum's own area, π (R₁ + R₂) L with
+/// L = (R₁ − R₂) / sin α, and its extent.
+#[test]
+fn a_cone_loop_running_out_along_its_seam_is_closed_at_the_seam_end() {
+    let (scene, _) = healed_model("models/generated/gen-4-17-cone.step");
+    let (m, eps) = face_mesh(&scene, 162);
+    let (r_wide, r_small, half_angle) = (43.206799055881f64, 3.463799055881f64, 1.521921007542f64);
+    let slant = (r_wide - r_small) / half_angle.sin();
+    let band = std::f64::consts::PI * (r_wide + r_small) * slant;
+    let (area, lo, hi) = area_and_box(&m);
+    let area = f64::from(area);
+    assert!(
+        area >= 0.99 * band && area <= 1.001 * band,
+        "area {area} (ε {eps}): the band is {band}"
+    );
+    for (a, b) in [
+        (lo.x, -r_wide),
+        (lo.y, -r_wide),
+        (hi.x, r_wide),
+        (hi.y, r_wide),
+    ] {
+        assert!((f64::from(a) - b).abs() < 0.01 * r_wide, "box {lo} .. {hi}");
+    }
+}
+
 /// A face of a helical V-thread (face #4228 of generated model gen-1-85, part 2: R 5, pitch
 /// 1.92, 4.5 turns, cut by a cone; `tests/data/step/thread_face_coarse.step.gz`). At a coarse
 /// tolerance (ε 1.66, the thread's own pitch) its loop points were projected onto the surface

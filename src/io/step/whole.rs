@@ -142,7 +142,7 @@ pub(super) fn loops_are_holes(
             // Unwrapped along the loop (it does not run around the axis: it closes).
             let mut angle = pts.first().map_or(0.0, |p| p.0);
             let unwrapped: Vec<(f64, f64)> = std::iter::once(angle)
-                .chain(angle_steps(&pts).map(|d| {
+                .chain(angle_steps(pts).map(|d| {
                     angle += d;
                     angle
                 }))

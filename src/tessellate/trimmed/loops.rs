@@ -225,16 +225,29 @@ pub(super) fn close_wrapping_loops(
             // The loop runs from `first` to `first + w·P`; close it on the side of the domain.
             let end =
                 first.uv + DVec2::new(wu as f64 * pu.unwrap_or(0.0), wv as f64 * pv.unwrap_or(0.0));
-            // A cone's loop is closed at its apex (truck reports a nominal range for cones);
-            // otherwise at the end of the range on the side of the domain.
+            // A cone's loop is closed at its apex (truck reports a nominal range for cones),
+            // unless the loop itself runs away from its first point (along a seam, to a
+            // vertex where no edge runs round: generated model gen-4-17, a wide cone between
+            // a circle of radius 3.5 and a seam to radius 43.2, was drawn as the disc inside
+            // the circle and a sliver along the seam): closed at the loop's far end then, as
+            // Open CASCADE closes its parameter-space wire. Otherwise at the end of the range
+            // on the side of the domain.
             let apex = |along_u: bool| {
-                singular_range(s, first.uv, along_u).map(|(a, b)| {
-                    let t0 = if along_u { first.uv.x } else { first.uv.y };
-                    if (a - t0).abs() > (b - t0).abs() {
-                        a
-                    } else {
-                        b
-                    }
+                let t0 = if along_u { first.uv.x } else { first.uv.y };
+                let along = |b: &BPoint| if along_u { b.uv.x } else { b.uv.y };
+                let far = lp
+                    .iter()
+                    .map(along)
+                    .max_by(|a, b| (a - t0).abs().total_cmp(&(b - t0).abs()))
+                    .filter(|&t| (t - t0).abs() > 1e-9 * (1.0 + t0.abs()));
+                far.or_else(|| {
+                    singular_range(s, first.uv, along_u).map(|(a, b)| {
+                        if (a - t0).abs() > (b - t0).abs() {
+                            a
+                        } else {
+                            b
+                        }
+                    })
                 })
             };
             let (a, b) = if wu != 0 {
