@@ -226,17 +226,26 @@ pub(super) fn close_wrapping_loops(
             let end =
                 first.uv + DVec2::new(wu as f64 * pu.unwrap_or(0.0), wv as f64 * pv.unwrap_or(0.0));
             // A cone's loop is closed at its apex (truck reports a nominal range for cones),
-            // unless the loop itself runs away from its first point (along a seam, to a
-            // vertex where no edge runs round: generated model gen-4-17, a wide cone between
-            // a circle of radius 3.5 and a seam to radius 43.2, was drawn as the disc inside
-            // the circle and a sliver along the seam): closed at the loop's far end then, as
-            // Open CASCADE closes its parameter-space wire. Otherwise at the end of the range
-            // on the side of the domain.
+            // unless it runs out along a seam (an edge it uses both ways) away from its first
+            // point, to a vertex where no edge runs round: closed at the seam's far end then,
+            // as Open CASCADE closes its parameter-space wire (generated model gen-4-17, a
+            // wide cone between a circle of radius 3.5 and a seam to radius 43.2, was drawn as
+            // the disc inside the circle and a sliver along the seam). A tip's seam ends at
+            // the apex; a loop without a seam (an oblique cut of a tip) keeps the apex.
+            // Otherwise at the end of the range on the side of the domain.
+            let on_seam = |b: &BPoint| {
+                b.src.is_some_and(|(li, ei, _)| {
+                    let edges = face.loops.get(li as usize);
+                    let id = edges.and_then(|l| l.get(ei as usize)).map(|le| le.edge.id);
+                    edges.is_some_and(|l| l.iter().filter(|le| Some(le.edge.id) == id).count() >= 2)
+                })
+            };
             let apex = |along_u: bool| {
                 let t0 = if along_u { first.uv.x } else { first.uv.y };
                 let along = |b: &BPoint| if along_u { b.uv.x } else { b.uv.y };
                 let far = lp
                     .iter()
+                    .filter(|b| on_seam(b))
                     .map(along)
                     .max_by(|a, b| (a - t0).abs().total_cmp(&(b - t0).abs()))
                     .filter(|&t| (t - t0).abs() > 1e-9 * (1.0 + t0.abs()));
