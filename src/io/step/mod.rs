@@ -41,7 +41,7 @@ use crate::model::{Sphere, TrimmedFace};
 use edge::{
     EDGE_VERTEX_TOLERANCE, Fit, LOOSE_EDGE_FRACTION, LOOSE_UNCERTAINTY_FACTOR, convert_edge,
 };
-use whole::{is_sphere, loops_are_holes, seam_clear_of, whole_surface_loop};
+use whole::{is_sphere, seam_clear_of, whole_surface_loop};
 
 /// A STEP file read: every face of the shells used, converted (not yet probed: see
 /// [`crate::prep::step`]), with the product structure that places them.
@@ -607,8 +607,8 @@ fn convert_face(
         loops = whole_surface_loop(&surface, id, 0.0).into_iter().collect();
     } else if (vertex_bound || is_sphere(&surface))
         && let Some(seam) = seam_clear_of(&surface, &loops)
-        && (vertex_bound || loops_are_holes(&surface, &loops, face.same_sense))
-        && let Some(whole) = whole_surface_loop(&surface, id, seam)
+        && (vertex_bound || seam.loops_are_holes(face.same_sense))
+        && let Some(whole) = whole_surface_loop(&surface, id, seam.at)
     {
         // A VERTEX_LOOP at a pole beside edge loops none of which runs around the surface:
         // they are holes in the whole sphere (a sphere cut by small features), which reaches

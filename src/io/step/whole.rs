@@ -84,13 +84,59 @@ fn angle_steps(angles: &[(f64, f64)]) -> impl Iterator<Item = f64> + '_ {
         })
 }
 
+/// A sphere face's loops seen around its axis ([`seam_clear_of`]).
+pub(super) struct ClearSeam {
+    /// The u the seam can run at, clear of the loops.
+    pub(super) at: f64,
+    /// The loops' signed areas in (angle, latitude), added up; `None` where a loop runs
+    /// through a pole (a point left out: a sphere's lune, generated models gen-1-9 and
+    /// gen-1-12), whose way round along the pole in u is not known, or steps a quarter turn
+    /// or more, which cannot be told from its other way round.
+    signed_area: Option<f64>,
+}
+
+impl ClearSeam {
+    /// Whether the loops are all holes by their orientation: the face lies outside them, on
+    /// the rest of the sphere. Their signed areas in (angle, latitude), which run as the
+    /// surface's (u, v), add up to the side the face is on: with the face left of its loops
+    /// (`domain_left`), an outer loop runs counter-clockwise and outweighs its holes; here
+    /// the sum says clockwise. Generated model gen-3-15: a sphere of 296° whose edges at the
+    /// poles are fillets has one loop (the two meridians of its cut and the fillet arcs), and
+    /// the even-odd rule alone drew the 64° wedge the loop encloses in (u, v), the complement
+    /// of the face. `false` where the orientation is not read.
+    pub(super) fn loops_are_holes(&self, domain_left: bool) -> bool {
+        self.signed_area
+            .is_some_and(|area| if domain_left { area < 0.0 } else { area > 0.0 })
+    }
+}
+
+/// The signed area in (angle, latitude) of a loop that closes without running around the
+/// axis, its angles unwrapped along it.
+fn signed_area(pts: &[(f64, f64)]) -> f64 {
+    let mut angle = pts.first().map_or(0.0, |p| p.0);
+    let unwrapped: Vec<(f64, f64)> = std::iter::once(angle)
+        .chain(angle_steps(pts).map(|d| {
+            angle += d;
+            angle
+        }))
+        .zip(pts.iter().map(|p| p.1))
+        .take(pts.len())
+        .collect();
+    0.5 * unwrapped
+        .iter()
+        .zip(unwrapped.iter().skip(1).chain(unwrapped.first()))
+        .map(|(a, b)| a.0 * b.1 - b.0 * a.1)
+        .sum::<f64>()
+}
+
 /// Where a sphere's seam can run clear of holes: the u of the middle of the widest gap
 /// between the loops' points seen around the sphere's axis (its poles are the ends of its v
-/// range; 16 points per edge). `None` when a loop runs around the axis (it bounds a cap, not
-/// a hole) or the surface has no v range.
-pub(super) fn seam_clear_of(surface: &TruckSurface, loops: &[Vec<LoopEdge>]) -> Option<f64> {
+/// range; 16 points per edge), and the loops' orientation. `None` when a loop runs around
+/// the axis (it bounds a cap, not a hole) or the surface has no v range.
+pub(super) fn seam_clear_of(surface: &TruckSurface, loops: &[Vec<LoopEdge>]) -> Option<ClearSeam> {
     let frame = AxisFrame::of(surface)?;
     let mut all = Vec::new();
+    let mut area = Some(0.0);
     for lp in loops {
         let angles = frame.loop_angles(lp);
         angles.first()?;
@@ -98,6 +144,9 @@ pub(super) fn seam_clear_of(surface: &TruckSurface, loops: &[Vec<LoopEdge>]) -> 
         if (turn / TAU).round() != 0.0 {
             return None;
         }
+        let clear =
+            angles.len() == 16 * lp.len() && angle_steps(&angles).all(|d| d.abs() < 0.25 * TAU);
+        area = area.filter(|_| clear).map(|a| a + signed_area(&angles));
         all.extend(angles.iter().map(|a| a.0));
     }
     all.sort_by(f64::total_cmp);
@@ -107,57 +156,10 @@ pub(super) fn seam_clear_of(surface: &TruckSurface, loops: &[Vec<LoopEdge>]) -> 
         .zip(all.iter().skip(1).chain(std::iter::once(&(first + TAU))))
         .map(|(a, b)| (b - a, 0.5 * (a + b)))
         .max_by(|a, b| a.0.total_cmp(&b.0))?;
-    (gap > 0.0).then_some(at.rem_euclid(TAU))
-}
-
-/// Whether a sphere face's loops, none running around the axis ([`seam_clear_of`]), are all
-/// holes by their orientation: the face lies outside them, on the rest of the sphere. Their
-/// signed areas in (angle, latitude), which run as the surface's (u, v), add up to the side
-/// the face is on: with the face left of its loops (`domain_left`), an outer loop runs
-/// counter-clockwise and outweighs its holes; here the sum says clockwise. Generated model
-/// gen-3-15: a sphere of 296° whose edges at the poles are fillets has one loop (the two
-/// meridians of its cut and the fillet arcs), and the even-odd rule alone drew the 64° wedge
-/// the loop encloses in (u, v), the complement of the face.
-pub(super) fn loops_are_holes(
-    surface: &TruckSurface,
-    loops: &[Vec<LoopEdge>],
-    domain_left: bool,
-) -> bool {
-    let Some(frame) = AxisFrame::of(surface) else {
-        return false;
-    };
-    let angles: Vec<Vec<(f64, f64)>> = loops.iter().map(|lp| frame.loop_angles(lp)).collect();
-    // A loop through a pole (a point left out: a sphere's lune, generated models gen-1-9 and
-    // gen-1-12) may run along the pole either way round in u, and a step of a quarter turn
-    // or more cannot be told from its other way round: the orientation is not read then.
-    let clear = loops.iter().zip(&angles).all(|(lp, pts)| {
-        pts.len() == 16 * lp.len() && angle_steps(pts).all(|d| d.abs() < 0.25 * TAU)
-    });
-    if !clear {
-        return false;
-    }
-    let area: f64 = angles
-        .iter()
-        .map(|pts| {
-            // Unwrapped along the loop (it does not run around the axis: it closes).
-            let mut angle = pts.first().map_or(0.0, |p| p.0);
-            let unwrapped: Vec<(f64, f64)> = std::iter::once(angle)
-                .chain(angle_steps(pts).map(|d| {
-                    angle += d;
-                    angle
-                }))
-                .zip(pts.iter().map(|p| p.1))
-                .take(pts.len())
-                .collect();
-            0.5 * unwrapped
-                .iter()
-                .zip(unwrapped.iter().skip(1).chain(unwrapped.first()))
-                .map(|(a, b)| a.0 * b.1 - b.0 * a.1)
-                .sum::<f64>()
-        })
-        .sum();
-    let facing = if domain_left { area } else { -area };
-    facing < 0.0
+    (gap > 0.0).then(|| ClearSeam {
+        at: at.rem_euclid(TAU),
+        signed_area: area,
+    })
 }
 
 /// Whether `surface` is a sphere (the one surface [`whole_surface_loop`] bounds).
