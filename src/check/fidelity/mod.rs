@@ -443,8 +443,10 @@ pub(crate) fn measure_with(
                     // can end in one local minimum of a B-spline fillet (gen-4-3's face #8204,
                     // #2683 of `models/generated/gen-4-3-fillet`: 1.56 ε read where the
                     // surface passes 3e-7 from the sample; `stats` disagreed with the judge).
-                    let within = corner.is_some_and(|uv| off(&uv) <= eps);
-                    let scratch = match good(&corner) || (agree && within) {
+                    let corner_off = corner.map(|uv| off(&uv));
+                    let corner_good = corner_off.is_some_and(|d| d <= 0.25 * eps);
+                    let within = corner_off.is_some_and(|d| d <= eps);
+                    let scratch = match corner_good || (agree && within) {
                         true => None,
                         false => face.project_in(p, None, grid),
                     };
