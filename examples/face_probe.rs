@@ -51,10 +51,11 @@ fn main() {
         std::process::exit(2);
     };
     println!(
-        "face #{id}: {} loops, radius {:.4}, surface {:?}",
+        "face #{id}: {} loops, radius {:.4}, surface {:?}, closed (u, v) {:?}",
         face.loops.len(),
         face.bounds.radius,
-        std::mem::discriminant(&face.surface)
+        std::mem::discriminant(&face.surface),
+        face.closed
     );
     if std::env::var_os("FACE_PROBE_LOOPS").is_some() {
         use patchwork::model::trimmed::SurfaceEval;

@@ -299,6 +299,15 @@ pub(crate) fn loop_points(loops: &[Vec<LoopEdge>]) -> Vec<DVec3> {
         .collect()
 }
 
+/// Relative gap (of the surface's size) within which [`TrimmedFace::closed_directions`] takes
+/// a surface as closing on itself. OCCT closes a B-spline band only to its modelling
+/// tolerance: generated model gen-12-57's band (a cone cut by a sphere, offset) closes in v
+/// to 1.1e-7 of a size of 2.8, 4e-8 of it, with its seam edge used twice by the face's
+/// loop. At 1e-9 the band was not taken as closed: its loop ran along the seam at v = 0
+/// twice, the domain was the square doubled on itself, and the face was drawn 14.9 ε off
+/// its surface (6.9 T by Open CASCADE's judge).
+pub(crate) const CLOSED_TOL: f64 = 1e-6;
+
 /// A face: a surface and its boundary loops (outer and holes, in any order; the domain is
 /// what an even-odd rule over all loops encloses in parameter space).
 #[derive(Clone, Debug)]

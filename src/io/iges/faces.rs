@@ -23,7 +23,7 @@ use super::directory::{Entry, IgesFile};
 use super::entities::{Decoder, expect_type};
 use super::nurbs::Nurbs;
 use crate::isolate::isolated;
-use crate::model::trimmed::{LoopEdge, TrimEdge};
+use crate::model::trimmed::{CLOSED_TOL, LoopEdge, TrimEdge};
 use crate::model::{Sphere, TrimmedFace};
 
 /// How far (relative to the loop's size) a lifted parameter-space curve may stray from the
@@ -258,7 +258,7 @@ pub fn face(d: &mut Decoder<'_, '_>, e: &Entry) -> Result<TrimmedFace, IgesError
         })?
     };
     let closed =
-        isolated(|| TrimmedFace::closed_directions(&surface, 1e-9)).unwrap_or((None, None));
+        isolated(|| TrimmedFace::closed_directions(&surface, CLOSED_TOL)).unwrap_or((None, None));
     let mut loops = loops;
     if loops.is_empty() || !loops.iter().any(|l| l.1) {
         // No outer boundary: the whole parameter rectangle.

@@ -36,7 +36,7 @@ use truck_stepio::r#in::{EdgeCurveHolder, FaceSurfaceHolder, Table};
 use super::LoadError;
 use crate::isolate::isolated;
 use crate::model::nurbs::{FastSurface, NurbsSurface};
-use crate::model::trimmed::{LoopEdge, TrimEdge, TruckSurface};
+use crate::model::trimmed::{CLOSED_TOL, LoopEdge, TrimEdge, TruckSurface};
 use crate::model::{Sphere, TrimmedFace};
 use edge::{
     EDGE_VERTEX_TOLERANCE, Fit, LOOSE_EDGE_FRACTION, LOOSE_UNCERTAINTY_FACTOR, convert_edge,
@@ -622,7 +622,7 @@ fn convert_face(
     }
     let pts = crate::model::trimmed::loop_points(&loops);
     let closed =
-        isolated(|| TrimmedFace::closed_directions(&surface, 1e-9)).unwrap_or((None, None));
+        isolated(|| TrimmedFace::closed_directions(&surface, CLOSED_TOL)).unwrap_or((None, None));
     let fast = match offset {
         Some((_, distance)) => Some(Arc::new(match NurbsSurface::of(&surface) {
             Some(base) => FastSurface::Offset { base, distance },
