@@ -1,6 +1,8 @@
 //! One trimmed face through the trimmed tessellator at several tolerances: triangles, grid,
 //! achieved error / ε. `cargo run --release --example face_probe -- FILE FACE_ID [REL...]`
-//! (REL: ε as a fraction of the face's bounding radius; default 1e-2 3e-3 1e-3).
+//! (REL: ε as a fraction of the face's bounding radius; default 1e-2 3e-3 1e-3). FACE_ID 0
+//! lists every face's mesh box, or with `FACE_PROBE_POINT=x,y,z` how near each face's mesh
+//! comes to that point (which face an OCCT judge's sample belongs to).
 
 use patchwork::model::PatchSurface;
 use patchwork::tessellate::{PatchMesh, TrimmedTessellator};
@@ -33,6 +35,28 @@ fn main() {
             if let PatchSurface::Trimmed(f) = &p.surface {
                 let eps = 1e-2 * f.bounds.radius;
                 if t.tessellate(f, eps, &mut out).is_ok() {
+                    // FACE_PROBE_POINT="x,y,z": how near the face's mesh comes to that point.
+                    if let Ok(at) = std::env::var("FACE_PROBE_POINT") {
+                        let c: Vec<f32> = at
+                            .split(',')
+                            .filter_map(|x| x.trim().parse().ok())
+                            .collect();
+                        if let [x, y, z] = c[..] {
+                            let q = glam::Vec3::new(x, y, z);
+                            let d = out
+                                .positions
+                                .iter()
+                                .map(|v| v.distance(q))
+                                .fold(f32::MAX, f32::min);
+                            println!(
+                                "face #{} ({}) instance {}: nearest vertex {d:.3}",
+                                f.id,
+                                f.kind(),
+                                p.instance
+                            );
+                            continue;
+                        }
+                    }
                     let (lo, hi) = out.positions.iter().fold(
                         (glam::Vec3::splat(f32::MAX), glam::Vec3::splat(f32::MIN)),
                         |(lo, hi), q| (lo.min(*q), hi.max(*q)),
