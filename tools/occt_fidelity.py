@@ -22,7 +22,9 @@ triangles are placed by the instance's world location. A generated model's parts
 as OCCT built them (cad_generator.build_step writes them beside the STEP in OCCT's own
 format), not as OCCT reads back the STEP it wrote: the round trip can change a face (seed 7
 model 6: a sphere's face read back with its hole covered twice); where the two differ the
-report says so ("judged as built").
+report says so ("judged as built"). Where the STEP holds fewer faces than the parts built
+(OCCT's writer left some out: seed 12 model 48) and the model fails against the parts, it is
+judged again against OCCT's reading of the STEP, and passes there only ("judged as read back").
 
 Checks (a file fails if any does):
   (c) assembly: the number of placed instances is the same, and pairing them by
@@ -1126,12 +1128,43 @@ def run_file(path, rels, pw, max_samples, workdir, seed, built=None):
             nt = sum(len(i["F"]) for i in ours)
             per_tri = 4 if nt < 20000 else (1 if nt < 200000 else 0)
             res = dict(base, **evaluate(occt, ours, rel, T, diag, fine, rng, max_samples, per_tri))
+            if res["fail"] and getattr(occt, "roundtrip", None):
+                res = judge_read_back(res, base, plain, ours, rel, T, diag, seed, max_samples, per_tri)
         res["placements_occt"] = occt.placements
         if getattr(occt, "roundtrip", None):
             res["roundtrip"] = occt.roundtrip
         res["time"] = time.time() - t1 + (t_read if rel == rels[0] else 0.0)
         rows.append(res)
     return rows
+
+
+def judge_read_back(res, base, plain, ours, rel, T, diag, seed, max_samples, per_tri):
+    """A generated model that fails against the parts OCCT built, where the STEP it wrote
+    holds fewer faces than those parts: judged again against OCCT's reading of that STEP. The
+    STEP is our only input, and OCCT's writer can leave faces out of it (seed 12 model 48: a
+    fused cylinder built with 65 faces, written with 58 ADVANCED_FACEs; the 45 mm² torus face
+    missing from the file was the judge's 4.5 T "nothing drawn there"). Passing against OCCT's
+    own reading of the same file passes, and says so; failing both keeps the verdict against
+    the parts as built. A read-back with as many faces keeps that verdict: the reader can be
+    the one that is wrong (seed 7 model 6, a hole covered twice), and a renderer wrong the
+    same way must not pass by it."""
+    try:
+        occt = Occt(plain)
+    except Exception:  # noqa: BLE001 (the read-back cannot be judged: keep the verdict)
+        return res
+    read_faces = sum(_count_faces(p["shape"]) for p in occt.protos)
+    if not read_faces < base["faces"]:
+        return res
+    fine = occt.mesh(T / 10)
+    alt = evaluate(occt, ours, rel, T, diag, fine, np.random.default_rng(seed), max_samples, per_tri)
+    if alt["fail"]:
+        return res
+    note = "fails against the parts as built (%d faces; a %.2f T, b %.2f T) but passes against OCCT's reading of the STEP it wrote (%d faces)" % (
+        base["faces"], res.get("a_over_T", float("nan")), res.get("b_over_T", float("nan")), read_faces)
+    alt = dict(base, **alt)
+    alt["fail_note"] = "; ".join(n for n in (alt.get("fail_note"), note) if n)
+    alt["judged_read_back"] = True
+    return alt
 
 
 # ----------------------------------------------------------------------------- table
@@ -1176,7 +1209,8 @@ def print_table(rows):
             if r.get("fail_note"):
                 log("    note: " + r["fail_note"])
             for n in r.get("roundtrip", []):
-                log("    judged as built; OCCT's reading of its STEP differs: " + n)
+                how = "judged as read back" if r.get("judged_read_back") else "judged as built"
+                log("    %s; OCCT's reading of its STEP differs: %s" % (how, n))
             for f in r.get("fail", []):
                 log("    FAIL " + f)
             for f in r.get("a_faces", []):
@@ -1332,6 +1366,13 @@ def self_test(args):
         # other parts are not required to match).
         ok_rt = any(x.startswith("part 1:") for x in seen)
         log("  a generated model judged as built: round-trip differences %s  %s" % (seen or "none", "ok" if ok_rt else "FAILED (expected part 1)"))
+        # Its read-back holds as many faces as the parts built (the reader covers the hole
+        # twice): a failure against the parts is not judged again against that reading.
+        built_faces = sum(_count_faces(p["shape"]) for p in Occt(step, read_built(step + ".brep", info["built_parts"])).protos)
+        failing = {"fail": ["(self-test)"]}
+        kept = judge_read_back(failing, {"faces": built_faces}, step, None, 1e-3, 1.0, 1.0, 0, 100, 1) is failing
+        log("  a reader's error is not judged by: %s" % ("ok" if kept else "FAILED (judged against the read-back)"))
+        ok_rt = ok_rt and kept
     except Exception as e:  # noqa: BLE001
         ok_rt = False
         log("  a generated model judged as built: FAILED (%s)" % e)
