@@ -386,15 +386,24 @@ class Dropped(Exception):
 
 
 def _occt_errors():
-    # OCP binds every Standard_* exception straight to Python's Exception (not to
-    # Standard_Failure as in C++), so each is named: an op that raises Standard_NoSuchObject
-    # (MakeThickSolidByJoin: "no parameter on edge", seed 1 model 81) is dropped like any other.
-    import OCP.Standard as std
+    # OCP binds every OCCT exception straight to Python's Exception (not to Standard_Failure
+    # as in C++), so each is named: an op that raises Standard_NoSuchObject
+    # (MakeThickSolidByJoin: "no parameter on edge", seed 1 model 81) or StdFail_NotDone
+    # (MakeThickSolidByJoin: "command not done", seed 16 model 10, which stopped the whole
+    # run) is dropped like any other. The exception packages of the modelling algorithms.
+    import importlib
 
-    found = tuple(getattr(std, n) for n in dir(std)
-                  if n.startswith("Standard_") and isinstance(getattr(std, n), type)
-                  and issubclass(getattr(std, n), BaseException))
-    return found + (RuntimeError,)
+    found = []
+    for module in ("Standard", "StdFail", "gp", "Geom", "Geom2d", "TopoDS", "BRep", "BRepExtrema"):
+        try:
+            m = importlib.import_module("OCP." + module)
+        except ImportError:
+            continue
+        for n in dir(m):
+            c = getattr(m, n)
+            if isinstance(c, type) and issubclass(c, BaseException) and "_" in n:
+                found.append(c)
+    return tuple(found) + (RuntimeError,)
 
 
 OCCT_ERRORS = ()  # set in build_step (OCP is imported on first use)
