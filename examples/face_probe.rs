@@ -92,7 +92,10 @@ fn main() {
                     let uv = face.project(p, hint);
                     hint = uv;
                     let d = uv.map(|uv| face.point(uv).distance(p));
-                    println!("  edge #{} k {k}: p {p:.3} uv {uv:?} off {d:?}", e.id);
+                    println!(
+                        "  edge #{} k {k}: p {p:.3} uv {uv:?} off {d:?} (t {} .. {}, wrap {:?}, forward {})",
+                        e.id, e.t0, e.t1, e.wrap, le.forward
+                    );
                 }
             }
         }

@@ -1896,3 +1896,35 @@ fn a_band_that_closes_to_the_modelling_tolerance_is_unwrapped_across_its_seam() 
         "the band #563 is measured"
     );
 }
+
+/// gen-18-45 (seed 18 model 45, as built; kept whole, 31 KB): the top plane of a revolved
+/// part fused with a cylinder (#796) has a peninsula about 1.5 mm wide between the notch the
+/// cylinder left and its outer circle. At T 0.848 its edges' polylines (within ε/2) crossed;
+/// spade left 2 constraints out, the parity fill was off, and the peninsula was dropped:
+/// `stats` read 4.56 ε missing while OCCT's judge, sampling the whole model, passed. Crossing
+/// polylines now have the face tessellated again with its edges followed to ε/8: 0 crossing,
+/// the peninsula drawn.
+#[test]
+fn a_peninsula_narrower_than_the_tolerance_is_drawn() {
+    let faces = measured_within("models/generated/gen-18-45.step.gz", 0.848, 20, 1.0);
+    assert!(
+        faces.iter().any(|(_, f)| f.face == 796),
+        "the plane #796 is measured"
+    );
+}
+
+/// gen-16-27 (seed 16 model 27 reduced to its revolved part, chamfered and cut by a box): the
+/// chamfer's sliver face #1441 (0.083 mm² on OCCT's side) is bounded by a B-spline circle's
+/// edge #1447 from the circle's seam to 0.041 rad past it. Its end was located at 36.197 on a
+/// knot range ending at 35.959 (truck's search ran past the last knot, where the curve's last
+/// piece passes the seam again): the edge ran a whole turn round, and the face covered the
+/// whole band (`stats` 138 ε at T 0.3, 8 791 samples outside the trim; OCCT's judge 12.5 T on
+/// the whole model). Located inside its range, it is the short arc: 0.90 ε.
+#[test]
+fn an_edge_is_located_inside_its_curves_range() {
+    let faces = measured_within("models/generated/gen-16-27.step.gz", 0.3, 9, 1.0);
+    assert!(
+        faces.iter().any(|(_, f)| f.face == 1441),
+        "the chamfer's sliver #1441 is measured"
+    );
+}

@@ -164,7 +164,17 @@ fn clamped_range(knots: &[f64], degree: usize) -> Option<(f64, f64)> {
 /// Parameter of `p` on `curve` (within `tol`): truck's search, else Newton from the tangent
 /// estimate at the start of the range (or at 0 for an unbounded curve such as a line).
 fn locate(curve: &Curve3D, p: DVec3, range: Option<(f64, f64)>, tol: f64) -> Option<f64> {
-    let on = |t: f64| t.is_finite() && to_dvec(curve.subs(t)).distance(p) <= tol;
+    // Inside the curve's range: a B-spline evaluated past its last knot goes on along its
+    // last piece, and on a closed one (a B-spline circle) that passes the points just past
+    // its seam again. Generated model gen-16-27's chamfer edge from the seam to 0.041 rad
+    // past it was located at 36.197 on a range ending at 35.959, and ran a whole turn round.
+    let inside = |t: f64| {
+        range.is_none_or(|(a, b)| {
+            let margin = 1e-9 * (b - a).abs().max(1.0);
+            t >= a.min(b) - margin && t <= a.max(b) + margin
+        })
+    };
+    let on = |t: f64| t.is_finite() && inside(t) && to_dvec(curve.subs(t)).distance(p) <= tol;
     // truck's search on a hyperbola or a parabola may never return (its root finder's Newton
     // step has no limit): their parameter in closed form, refined.
     if let Some(t) = conic_parameter(curve, p) {

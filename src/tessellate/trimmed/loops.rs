@@ -523,13 +523,14 @@ pub(super) fn curve_between(
 }
 
 impl TrimmedTessellator {
-    /// The border of one loop: polylines of its edges, projected to parameter space.
+    /// The border of one loop: polylines of its edges within `tol`, projected to parameter
+    /// space.
     pub(super) fn loop_points(
         &mut self,
         face: &TrimmedFace,
         li: usize,
         lp: &[LoopEdge],
-        eps: f64,
+        tol: f64,
         fine_left: &mut bool,
         report: &mut TrimReport,
     ) -> Result<Vec<BPoint>, TrimError> {
@@ -538,7 +539,7 @@ impl TrimmedTessellator {
         let mut pts: Vec<BPoint> = Vec::new();
         for (k, le) in lp.iter().enumerate() {
             let e = &le.edge;
-            let (ts, dev) = polyline_params(e, eps * 0.5);
+            let (ts, dev) = polyline_params(e, tol);
             report.trim_error = report.trim_error.max(dev);
             let n = ts.len();
             let ordered: Vec<f64> = if le.forward {

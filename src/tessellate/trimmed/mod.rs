@@ -6,7 +6,9 @@
 //! 1. **Trim polylines** — every edge curve is split until the chord deviates from the curve
 //!    by at most ε/2 (3 samples per segment), from the edge's own start vertex, so a shared
 //!    edge gives the same points to both faces when their ε agree. The vertices are the exact
-//!    STEP vertices.
+//!    STEP vertices. Where spade finds two polylines crossing (a peninsula of the face
+//!    narrower than ε), the face is tessellated again with its edges followed to ε/8, then
+//!    ε/32, and the attempt with the fewest crossings kept.
 //! 2. **Parameter space** — each point is projected onto the surface (nearest parameter, from
 //!    the previous point), unwrapped across the seams of periodic surfaces; where a loop runs
 //!    through a pole (a vanishing derivative) it runs along the pole line from the parameter
@@ -56,6 +58,9 @@ use loops::*;
 const MAX_EDGE_SEGMENTS: usize = 1 << 14;
 /// Most grid steps per direction.
 const MAX_GRID: usize = 400;
+/// Times a face whose trim polylines cross is tessellated again with them closer to its
+/// edges (see [`TrimmedTessellator::tessellate_with`]).
+const BORDER_RETRIES: usize = 2;
 /// Rounds of error-driven refinement.
 const REFINE_ROUNDS: usize = 10;
 /// Triangles are refined down to this fraction of ε: 7 samples find a triangle's largest
@@ -194,6 +199,49 @@ impl TrimmedTessellator {
             true => eps.max(f64::from(f32::EPSILON) * magnitude),
             false => eps,
         };
+        let mut border_tol = 0.5 * eps;
+        let mut result = self.attempt(face, eps, border_tol, shared_borders, out);
+        // Trim polylines that cross (two edges nearer each other than their chords' ε/2: a
+        // peninsula of a face narrower than ε) leave spade's constraints out and the parity
+        // fill off; the face is tessellated again with its edges followed more closely
+        // (`BORDER_RETRIES` times, a quarter of the tolerance each), and the attempt with the
+        // fewest crossings is kept. Not with shared borders: those points must be the
+        // neighbour's too.
+        let mut best = border_tol;
+        for _ in 0..BORDER_RETRIES {
+            let crossings = match &result {
+                Ok(r) if r.crossing_constraints > 0 && !shared_borders => r.crossing_constraints,
+                _ => break,
+            };
+            border_tol *= 0.25;
+            let mut trial = PatchMesh::default();
+            match self.attempt(face, eps, border_tol, shared_borders, &mut trial) {
+                Ok(r) if r.crossing_constraints < crossings => {
+                    trial.clone_into(out);
+                    result = Ok(r);
+                    best = border_tol;
+                }
+                _ => break,
+            }
+        }
+        if best != border_tol {
+            // The last attempt was not kept: the tessellator's state (`loops`, `starts`) is
+            // the kept one's again.
+            result = self.attempt(face, eps, best, shared_borders, out);
+        }
+        result
+    }
+
+    /// One tessellation of `face` at `eps` (already checked), its trim polylines and border
+    /// segments within `border_tol` (ε/2 unless spade found them crossing).
+    fn attempt(
+        &mut self,
+        face: &TrimmedFace,
+        eps: f64,
+        border_tol: f64,
+        shared_borders: bool,
+        out: &mut PatchMesh,
+    ) -> Result<TrimReport, TrimError> {
         out.positions.clear();
         out.normals.clear();
         out.triangles.clear();
@@ -214,7 +262,7 @@ impl TrimmedTessellator {
         self.starts.resize(face.loops.len(), None);
         let mut fine_left = true;
         for (li, lp) in face.loops.iter().enumerate() {
-            let pts = self.loop_points(face, li, lp, eps, &mut fine_left, &mut report)?;
+            let pts = self.loop_points(face, li, lp, border_tol, &mut fine_left, &mut report)?;
             if pts.len() >= 2 {
                 self.loops.push(pts);
             }
@@ -232,7 +280,7 @@ impl TrimmedTessellator {
         let grid_step = (hi - lo) / DVec2::new(steps.0 as f64, steps.1 as f64);
         for lp in loops.iter_mut() {
             split_poles(face, lp, grid_step);
-            refine_border(face, lp, eps * 0.5, shared_borders);
+            refine_border(face, lp, border_tol, shared_borders);
         }
         if loops.iter().all(|l| l.len() < 3) {
             return Err(TrimError::EmptyDomain);
