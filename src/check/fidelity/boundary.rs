@@ -148,6 +148,12 @@ impl Boundary {
             let mut prev: Option<DVec2> =
                 face.project_along_in(pts[1].0, None, far, &mut fine_left, grid);
             let mut last: Option<(usize, f64)> = None;
+            // Whether the edge the previous point lies on is a seam: the points splitting the
+            // segment from there lie on that edge, not on the next (generated model
+            // gen-22-26: the last piece of a loft's top edge, split before the seam edge's
+            // start, was flagged a seam; even-odd skipped it, and a mesh sample below it,
+            // inside the face, was read 1.87 ε outside).
+            let mut last_seam = false;
             for &(p, seam, at) in &pts {
                 let Some(mut uv) = face.project_along_in(p, prev, far, &mut fine_left, grid) else {
                     continue;
@@ -168,10 +174,11 @@ impl Boundary {
                     let mut mid = Vec::new();
                     parameter_split(face, e, (ta, q), (tb, uv), tol, periods, 12, &mut mid);
                     for (pm, uvm) in mid {
-                        out.push((pm, uvm, seam));
+                        out.push((pm, uvm, last_seam));
                     }
                 }
                 last = Some(at);
+                last_seam = seam;
                 let (su, sv) = face.derivs(uv);
                 if su.is_finite() && sv.is_finite() {
                     speeds += DVec2::new(su.length(), sv.length());
