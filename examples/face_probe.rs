@@ -31,31 +31,34 @@ fn main() {
         // Every face: its mesh's box at rel 1e-2 (to find a face drawn where it should not be).
         let mut t = TrimmedTessellator::new();
         let mut out = PatchMesh::default();
+        let point = std::env::var("FACE_PROBE_POINT").ok().and_then(|at| {
+            let c: Vec<f32> = at
+                .split(',')
+                .filter_map(|x| x.trim().parse().ok())
+                .collect();
+            match c[..] {
+                [x, y, z] => Some(glam::Vec3::new(x, y, z)),
+                _ => None,
+            }
+        });
         for p in &scene.patches {
             if let PatchSurface::Trimmed(f) = &p.surface {
                 let eps = 1e-2 * f.bounds.radius;
                 if t.tessellate(f, eps, &mut out).is_ok() {
                     // FACE_PROBE_POINT="x,y,z": how near the face's mesh comes to that point.
-                    if let Ok(at) = std::env::var("FACE_PROBE_POINT") {
-                        let c: Vec<f32> = at
-                            .split(',')
-                            .filter_map(|x| x.trim().parse().ok())
-                            .collect();
-                        if let [x, y, z] = c[..] {
-                            let q = glam::Vec3::new(x, y, z);
-                            let d = out
-                                .positions
-                                .iter()
-                                .map(|v| v.distance(q))
-                                .fold(f32::MAX, f32::min);
-                            println!(
-                                "face #{} ({}) instance {}: nearest vertex {d:.3}",
-                                f.id,
-                                f.kind(),
-                                p.instance
-                            );
-                            continue;
-                        }
+                    if let Some(q) = point {
+                        let d = out
+                            .positions
+                            .iter()
+                            .map(|v| v.distance(q))
+                            .fold(f32::MAX, f32::min);
+                        println!(
+                            "face #{} ({}) instance {}: nearest vertex {d:.3}",
+                            f.id,
+                            f.kind(),
+                            p.instance
+                        );
+                        continue;
                     }
                     let (lo, hi) = out.positions.iter().fold(
                         (glam::Vec3::splat(f32::MAX), glam::Vec3::splat(f32::MIN)),

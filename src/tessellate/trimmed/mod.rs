@@ -217,7 +217,7 @@ impl TrimmedTessellator {
             let mut trial = PatchMesh::default();
             match self.attempt(face, eps, border_tol, shared_borders, &mut trial) {
                 Ok(r) if r.crossing_constraints < crossings => {
-                    trial.clone_into(out);
+                    std::mem::swap(out, &mut trial);
                     result = Ok(r);
                     best = border_tol;
                 }
