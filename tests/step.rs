@@ -1963,3 +1963,25 @@ fn a_tube_thinner_than_the_tolerance_is_drawn_not_collapsed() {
     );
     measured_within_with("models/generated/gen-22-50.step.gz", 1.03, 5, 198);
 }
+
+/// gen-26-0-offset (seed 26 model 0 reduced to its part 1: a cone in common with a cylinder,
+/// offset by 2.122; `tests/data/step/gen-26-0-offset.json`). Face #20329, the offset's
+/// rolling band, has a vertex 2 mm off both its edges' curves: one edge is read ending at the
+/// vertex, the next starting at its curve's end. The mesh passes through the vertex; the
+/// measure's boundary took each edge's end to be the next edge's start and left the vertex
+/// out, so its offset from the surface was allowed nowhere: `stats` read 1.96 ε at T 1.01
+/// where Open CASCADE's judge, on the whole model, reads 0.86 T. With the vertex on the
+/// boundary: 0.90 ε.
+#[test]
+fn a_vertex_off_its_edges_curves_bounds_the_measure() {
+    let faces = measured_within("tests/data/step/gen-26-0-offset.step.gz", 1.01, 38, 1.0);
+    let band = faces
+        .iter()
+        .find(|(_, f)| f.face == 20329)
+        .expect("face #20329");
+    assert!(
+        band.1.edge_offset > 1.5,
+        "the band's corner lies {} off its surface",
+        band.1.edge_offset
+    );
+}

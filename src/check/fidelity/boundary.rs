@@ -7,6 +7,13 @@ use super::*;
 
 /// Equal steps every edge is cut into before its steps are split where they deviate.
 const EDGE_STEPS: usize = 8;
+
+/// Relative gap (of the face's radius) from an edge's end to the next edge's start past which
+/// the end is a boundary point of its own.
+const GAP: f64 = 1e-9;
+
+/// The edge index of such an end: no rest of an edge lies between it and the next point.
+const GAP_END: usize = usize::MAX;
 /// Where along a step the curve is compared with the chord (at the same fraction). The
 /// midpoint alone missed whole turns of a helix: across two turns the curve's midpoint lies
 /// on the chord (generated model gen-7-13: the thread flank's outer helix, 4.07 turns, kept 2
@@ -135,6 +142,22 @@ impl Boundary {
                 for (i, &t) in ts.iter().enumerate().take(n - 1) {
                     pts.push((if i == 0 { first } else { e.point(t) }, seam, (ei, t)));
                 }
+                // An edge whose end is not the next edge's start: its end too, as the
+                // tessellator's border has it (generated model gen-26-0: a vertex 2 mm off
+                // both its edges' curves, read as one edge's end and as the curve's end on the
+                // other; the mesh passes through the vertex, and without it here the vertex's
+                // offset from the surface was allowed nowhere: 1.96 ε where OCCT's judge,
+                // against the face's tolerant boundary, reads 0.86 T).
+                let end = if le.forward { e.end } else { e.start };
+                let next = &lp[(ei + 1) % lp.len()];
+                let next_start = if next.forward {
+                    next.edge.start
+                } else {
+                    next.edge.end
+                };
+                if end.distance(next_start) > GAP * face.bounds.radius {
+                    pts.push((end, seam, (GAP_END, b)));
+                }
             }
             if pts.len() < 2 {
                 continue;
@@ -168,7 +191,9 @@ impl Boundary {
                 // strays from the curve on the surface (a nearly straight edge on a torus
                 // whose parameter image bends: its uv chord cut 1.9 ε off the face).
                 // From an edge's last point to the next edge's start: the rest of that edge.
-                if let (Some((ei, ta)), Some(q)) = (last, prev) {
+                if let (Some((ei, ta)), Some(q)) = (last, prev)
+                    && ei != GAP_END
+                {
                     let e = &lp[ei].edge;
                     let tb = if ei == at.0 { at.1 } else { ends[ei] };
                     let mut mid = Vec::new();
@@ -190,6 +215,7 @@ impl Boundary {
             // The last edge's rest, to the loop's first point.
             if let (Some(&(_, first, _)), Some(&(_, end, end_seam)), Some((ei, ta))) =
                 (out.first(), out.last(), last)
+                && ei != GAP_END
             {
                 let close = unwrap_near(first, end, periods);
                 let mut mid = Vec::new();
