@@ -1078,6 +1078,23 @@ def read_built(brep, names):
     return dict(zip(names, parts))
 
 
+def max_tolerance(shape):
+    """The largest tolerance OCCT gives a vertex, edge or face of `shape`: how far the B-rep
+    may be from its own geometry (a boolean's vertex can carry millimetres)."""
+    from OCP.BRep import BRep_Tool
+    from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_VERTEX
+    from OCP.TopExp import TopExp_Explorer
+    from OCP.TopoDS import TopoDS
+
+    worst = 0.0
+    for kind, cast in ((TopAbs_VERTEX, TopoDS.Vertex), (TopAbs_EDGE, TopoDS.Edge), (TopAbs_FACE, TopoDS.Face)):
+        e = TopExp_Explorer(shape, kind)
+        while e.More():
+            worst = max(worst, BRep_Tool.Tolerance_s(cast(e.Current())))
+            e.Next()
+    return worst
+
+
 def built_beside(path, workdir):
     """A kept generated model's parts as OCCT built them: `X.brep.gz` beside `X.step[.gz]`,
     their names in `X.json` (`built.built_parts`). The shipped reduction is then judged as
@@ -1475,7 +1492,20 @@ def judge_generated(args):
         except Exception as e:  # noqa: BLE001 - judged against OCCT's reading, saying so
             log("    %s: the parts as built could not be read (%s): judged against OCCT's reading of its STEP" % (name, e))
             built = None
-        return info, run_file(step, rels, args.patchwork, args.max_samples, work, args.seed, built)
+        res = run_file(step, rels, args.patchwork, args.max_samples, work, args.seed, built)
+        # A part whose B-rep OCCT only holds together with a tolerance beyond T (seed 29 model
+        # 25: a box in common with a sphere and a cylinder, less a cone; a vertex of 9.17 mm,
+        # edges 5 mm off their faces, read back otherwise than built) is defined only to that
+        # tolerance: a mesh that agrees with OCCT's within T passes, but one that does not is
+        # no evidence of a fault, and the model is set aside (seed 1 model 32, 0.6 mm at T
+        # 0.477, passes and is judged).
+        Ts = [r["T"] for r in res if r.get("T")]
+        if built and Ts and any(r["fail"] for r in res):
+            tol = max(max_tolerance(s) for s in built.values())
+            if tol > min(Ts):
+                raise gen.Dropped("it fails, but OCCT's parts as built carry a tolerance of %.3g mm, beyond T %.3g mm" % (
+                    tol, min(Ts)))
+        return info, res
 
     try:
         for i in range(args.gen_start, args.gen_start + args.generate):
