@@ -69,7 +69,6 @@ const REFINE_ROUNDS: usize = 10;
 pub(crate) const REFINE_TARGET: f64 = 0.95;
 /// Most vertices per face.
 const MAX_VERTICES: usize = 400_000;
-
 /// Vertices per ε² of a face's area that refinement may reach: a triangulation of edges
 /// ε/4 has about 18.5 (equilateral triangles of area √3/64 ε², two per vertex). A chord
 /// of ε/4 strays ε/(128 r/ε) from a curve of radius r, so only detail of radius below
@@ -365,9 +364,9 @@ impl TrimmedTessellator {
             let mut worst = 0.0f64;
             let mut to_insert = Vec::new();
             for t in inside_faces {
-                let e = self.triangle_error(s, t);
+                let (e, chord_off) = self.triangle_error(s, t);
                 worst = worst.max(e);
-                if e > REFINE_TARGET * eps || self.wraps(s, &cdt, t, eps) {
+                if e > REFINE_TARGET * eps || self.wraps(&cdt, t, chord_off, eps) {
                     let c = (self.uvs[t[0] as usize]
                         + self.uvs[t[1] as usize]
                         + self.uvs[t[2] as usize])
@@ -587,21 +586,20 @@ impl TrimmedTessellator {
     }
 
     /// Whether triangle `t` wraps round the surface: one of its inner edges (not a border
-    /// constraint) has a 3D chord shorter than the distance from the chord's middle to the
-    /// surface at the middle of its parameters, as an edge spanning over 253° of a circle
-    /// does (and one between the two sides of a seam, whose chord is nothing). A surface
-    /// thinner than ε does it: a tube of radius 0.335 at ε 1.03 (seed 22 model 50 of
-    /// `tools/cad_generator.py`) had no grid point inside, and its triangles ran from one side
-    /// of its seam to the other, all on one line: within ε of the tube, yet of no area,
-    /// nothing drawn, 1.4 ε from any drawn surface. Along a pole the surface is one point,
-    /// the chord nothing and the distance nothing: a fan's slivers there do not wrap.
-    fn wraps(&self, s: &impl SurfaceEval, cdt: &Cdt, t: [u32; 3], eps: f64) -> bool {
+    /// constraint) has a 3D chord shorter than `chord_off`, the distance from the chord's
+    /// middle to the surface at the middle of its parameters ([`Self::triangle_error`]), as an
+    /// edge spanning over 253° of a circle does (and one between the two sides of a seam, whose
+    /// chord is nothing). A surface thinner than ε does it: a tube of radius 0.335 at ε 1.03
+    /// (seed 22 model 50 of `tools/cad_generator.py`) had no grid point inside, and its
+    /// triangles ran from one side of its seam to the other, all on one line: within ε of the
+    /// tube, yet of no area, nothing drawn, 1.4 ε from any drawn surface. Along a pole the
+    /// surface is one point, the chord nothing and the distance nothing: a fan's slivers there
+    /// do not wrap.
+    fn wraps(&self, cdt: &Cdt, t: [u32; 3], chord_off: [f64; 3], eps: f64) -> bool {
         (0..3).any(|k| {
             let (i, j) = (t[k], t[(k + 1) % 3]);
-            let (pi, pj) = (self.pos[i as usize], self.pos[j as usize]);
-            let middle = s.point((self.uvs[i as usize] + self.uvs[j as usize]) * 0.5);
-            let off = middle.distance((pi + pj) * 0.5);
-            off > pi.distance(pj).max(1e-6 * eps)
+            let chord = self.pos[i as usize].distance(self.pos[j as usize]);
+            chord_off[k] > chord.max(1e-6 * eps)
                 && !cdt.exists_constraint(
                     FixedVertexHandle::from_index(i as usize),
                     FixedVertexHandle::from_index(j as usize),
@@ -611,8 +609,9 @@ impl TrimmedTessellator {
 
     /// Largest distance surface ↔ triangle at 7 samples, beyond what its corners' own
     /// distances from the surface (`off`: border points on edge curves that lie off it)
-    /// account for there — refinement cannot move the border.
-    fn triangle_error(&self, s: &impl SurfaceEval, t: [u32; 3]) -> f64 {
+    /// account for there — refinement cannot move the border; and the distance at each edge's
+    /// middle (edges `t[k]`–`t[k + 1]`), as it is, for [`Self::wraps`].
+    fn triangle_error(&self, s: &impl SurfaceEval, t: [u32; 3]) -> (f64, [f64; 3]) {
         let (u0, u1, u2) = (
             self.uvs[t[0] as usize],
             self.uvs[t[1] as usize],
@@ -633,14 +632,19 @@ impl TrimmedTessellator {
             [1.0 / 6.0, 2.0 / 3.0, 1.0 / 6.0],
             [1.0 / 6.0, 1.0 / 6.0, 2.0 / 3.0],
         ];
-        B.iter()
-            .map(|b| {
-                let uv = u0 * b[0] + u1 * b[1] + u2 * b[2];
-                let lin = p0 * b[0] + p1 * b[1] + p2 * b[2];
-                let given = o[0] * b[0] + o[1] * b[1] + o[2] * b[2];
-                (s.point(uv).distance(lin) - given).max(0.0)
-            })
-            .fold(0.0, f64::max)
+        let mut error = 0.0f64;
+        let mut middles = [0.0; 3];
+        for (k, b) in B.iter().enumerate() {
+            let uv = u0 * b[0] + u1 * b[1] + u2 * b[2];
+            let lin = p0 * b[0] + p1 * b[1] + p2 * b[2];
+            let given = o[0] * b[0] + o[1] * b[1] + o[2] * b[2];
+            let d = s.point(uv).distance(lin);
+            if (1..=3).contains(&k) {
+                middles[k - 1] = d;
+            }
+            error = error.max((d - given).max(0.0));
+        }
+        (error, middles)
     }
 }
 
