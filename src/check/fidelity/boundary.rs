@@ -9,10 +9,9 @@ use super::*;
 const EDGE_STEPS: usize = 8;
 
 /// Relative gap (of the face's radius) from an edge's end to the next edge's start past which
-/// the end is a boundary point of its own.
+/// the end is a boundary point of its own ...
 const GAP: f64 = 1e-9;
-
-/// The edge index of such an end: no rest of an edge lies between it and the next point.
+/// ... with this edge index: no rest of an edge lies between it and the next point.
 const GAP_END: usize = usize::MAX;
 /// Where along a step the curve is compared with the chord (at the same fraction). The
 /// midpoint alone missed whole turns of a helix: across two turns the curve's midpoint lies
@@ -143,11 +142,9 @@ impl Boundary {
                     pts.push((if i == 0 { first } else { e.point(t) }, seam, (ei, t)));
                 }
                 // An edge whose end is not the next edge's start: its end too, as the
-                // tessellator's border has it (generated model gen-26-0: a vertex 2 mm off
-                // both its edges' curves, read as one edge's end and as the curve's end on the
-                // other; the mesh passes through the vertex, and without it here the vertex's
-                // offset from the surface was allowed nowhere: 1.96 ε where OCCT's judge,
-                // against the face's tolerant boundary, reads 0.86 T).
+                // tessellator's border has it (gen-26-0: a vertex 2 mm off both its edges'
+                // curves, one edge's end, the other's start at its curve's end; the mesh
+                // passes through it, its offset was allowed nowhere: 1.96 ε; judge 0.86 T).
                 let end = if le.forward { e.end } else { e.start };
                 let next = &lp[(ei + 1) % lp.len()];
                 let next_start = if next.forward {
