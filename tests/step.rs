@@ -1941,8 +1941,9 @@ fn a_seam_flag_stays_on_its_own_edge() {
 /// 17.943 · 3.236 = 122.2). At ε 1.03 the tube is thinner than ε: its grid had no point
 /// inside, and the triangles ran from one side of its seam to the other, all on one line,
 /// within ε of the tube (`stats` 0.77 ε) but of no area: nothing was drawn, and Open
-/// CASCADE's judge found the tube 1.42 T from any drawn surface. A triangle with less than
-/// half the area of the surface it stands for is refined: the tube is drawn.
+/// CASCADE's judge found the tube 1.42 T from any drawn surface. A triangle with an inner edge
+/// that wraps round the surface (its chord shorter than the surface's distance from the chord's
+/// middle) is refined: the tube is drawn.
 #[test]
 fn a_tube_thinner_than_the_tolerance_is_drawn_not_collapsed() {
     let (scene, _) = healed_model("models/generated/gen-22-50.step.gz");
