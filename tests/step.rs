@@ -1986,3 +1986,20 @@ fn a_vertex_off_its_edges_curves_bounds_the_measure() {
         band.1.edge_offset
     );
 }
+
+/// gen-33-39-thread (seed 33 model 39 reduced to its part 0, a thread of radius 5.65 and pitch
+/// 2.44, in metres; `tests/data/step/gen-33-39-thread.json`), at T 12.9 mm (2 % of the whole
+/// model's diagonal, above the thread's radius). The cylinder face at the thread's root end
+/// (#6572) is bounded by a circle and one turn of helix; each half turn of the helix was within
+/// the tolerance of its diameter, so its polyline was two chords, and the loop's parameters,
+/// unwrapped across its seam point to point, made the half turns cancel: the loop was taken
+/// to wind round the cylinder once and closed at its nominal ends, 1 m away (`stats` 77 ε,
+/// OCCT's judge on the whole model a 74.9 T). No polyline piece turns half a turn now.
+#[test]
+fn a_helix_coarser_than_its_radius_keeps_its_turn_in_the_trim_loop() {
+    let faces = measured_within("tests/data/step/gen-33-39-thread.step.gz", 12.9, 19, 1.0);
+    assert!(
+        faces.iter().any(|(_, f)| f.face == 6572),
+        "face #6572 is measured"
+    );
+}
