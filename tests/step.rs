@@ -2003,3 +2003,19 @@ fn a_helix_coarser_than_its_radius_keeps_its_turn_in_the_trim_loop() {
         "face #6572 is measured"
     );
 }
+
+/// gen-35-41-thread (seed 35 model 41 reduced to its part 0, a thread of radius 8.865 and
+/// pitch 2.228 over 8.36 turns; `tests/data/step/gen-35-41-thread.json`), at T 6.38 mm (2 % of
+/// the whole model's diagonal). The edges along the flank (#884 and its twins) are B-splines
+/// of 55 spans; cut in two halves of 4.18 turns, each half's samples, 1.05 turns apart, lay
+/// within 3.19 of its chord with their tangents along it, so the polyline crossed the thread
+/// in two chords and flank face #4624 was drawn off its trim (`stats` 1.39 ε, OCCT's judge on
+/// the whole model a 1.19 T). The deviation is now measured span by span.
+#[test]
+fn a_long_helix_edge_is_measured_span_by_span() {
+    let faces = measured_within("tests/data/step/gen-35-41-thread.step.gz", 6.38, 16, 1.0);
+    assert!(
+        faces.iter().any(|(_, f)| f.face == 4624),
+        "face #4624 is measured"
+    );
+}

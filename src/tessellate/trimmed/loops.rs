@@ -26,14 +26,46 @@ const NEED_MARGIN: f64 = 1.01;
 ///
 /// A segment whose curve runs round its chord rather than along it (at its midpoint) is split
 /// however near the chord its samples lie ([`across_chord`]): a helix of 8 turns in two segments of 4 had every
-/// sample on its chord, and the thread's flank was drawn 6.2 T off its face.
+/// sample on its chord, and the thread's flank was drawn 6.2 T off its face. A B-spline edge
+/// of more knot spans than `n0` is measured span by span instead ([`knot_spans`]; its pieces
+/// are still at least `n0`), and no piece turns more than 140° ([`ROUND`]).
 pub(super) fn polyline_params(e: &crate::model::trimmed::TrimEdge, tol: f64) -> (Vec<f64>, f64) {
     let n0 = match (&e.curve, e.is_closed()) {
         (_, true) => 8,
         (crate::model::trimmed::Curve3D::Line(_), false) => 1,
         _ => 2,
     };
-    curve_params(|t| e.point(t), e.t0, e.t1, n0, tol)
+    let measure = knot_spans(&e.curve, e.t0, e.t1).clamp(n0, MAX_MEASURED_SPANS);
+    measured_params(|t| e.point(t), e.t0, e.t1, n0, measure, tol)
+}
+
+/// At most this many of a B-spline edge's knot spans are measured one by one
+/// ([`knot_spans`]).
+const MAX_MEASURED_SPANS: usize = 4096;
+
+/// How many knot spans of a B-spline (or NURBS) curve lie between `t0` and `t1` (1 for any
+/// other curve). An edge's polyline is planned from the deviation of each span
+/// ([`measured_params`]): a polynomial piece cannot hide a turn from its samples, where
+/// two halves of a long helix can. A thread's edge of 8.36 turns (its parameter 0..55.7 over
+/// 55 spans), cut in two, put every sample of each half within 3.19 of its chord and its
+/// tangent along it (4.18 turns, the samples 1.05 turns apart), so the polyline was two
+/// chords across the thread (generated model gen-35-41 at T 6.38, 2 % of its diagonal: OCCT's
+/// judge a 1.19 T, `stats` 1.39 ε).
+fn knot_spans(curve: &crate::model::trimmed::Curve3D, t0: f64, t1: f64) -> usize {
+    use crate::model::trimmed::Curve3D;
+    let knots: &[f64] = match curve {
+        Curve3D::BSplineCurve(c) => c.knot_vec(),
+        Curve3D::NurbsCurve(c) => c.knot_vec(),
+        _ => return 1,
+    };
+    let (lo, hi) = (t0.min(t1), t0.max(t1));
+    let mut inner: Vec<f64> = knots
+        .iter()
+        .copied()
+        .filter(|&k| k > lo && k < hi)
+        .collect();
+    inner.dedup();
+    inner.len() + 1
 }
 
 /// Cosine of the largest angle between the curve's tangent at a segment's midpoint and the
@@ -72,6 +104,7 @@ fn across_chord(
 const ROUND: f64 = 0.35;
 
 /// [`polyline_params`] for the curve `point` from `t0` to `t1`, cut into `n0` first.
+#[cfg(test)]
 fn curve_params(
     point: impl Fn(f64) -> DVec3,
     t0: f64,
@@ -79,6 +112,20 @@ fn curve_params(
     n0: usize,
     tol: f64,
 ) -> (Vec<f64>, f64) {
+    measured_params(point, t0, t1, n0, n0, tol)
+}
+
+/// [`polyline_params`] for the curve `point` from `t0` to `t1`: its deviation measured on
+/// `m` equal segments (at least `n0`), and at least `n0` pieces.
+fn measured_params(
+    point: impl Fn(f64) -> DVec3,
+    t0: f64,
+    t1: f64,
+    n0: usize,
+    m: usize,
+    tol: f64,
+) -> (Vec<f64>, f64) {
+    let m = m.max(n0);
     // A segment across its chord at its midpoint counts as deviating by half the chord's
     // length (split; it asks for the pieces a deviation that large would). The midpoint's
     // tangent alone: at all three samples it cost 6-7 % of the corpus's tessellation time.
@@ -98,9 +145,9 @@ fn curve_params(
     };
     let at = |i: usize, n: usize| t0 + (t1 - t0) * i as f64 / n as f64;
     // Pieces each initial segment asks for (a NaN deviation asks for none, as before).
-    let need: Vec<f64> = (0..n0)
+    let need: Vec<f64> = (0..m)
         .map(|i| {
-            let w = (deviation(at(i, n0), at(i + 1, n0)).0 / tol).sqrt();
+            let w = (deviation(at(i, m), at(i + 1, m)).0 / tol).sqrt();
             if w.is_finite() { w } else { 0.0 }
         })
         .collect();
@@ -118,12 +165,12 @@ fn curve_params(
     let (mut seg, mut below) = (0usize, 0.0f64);
     for k in 1..pieces {
         let target = total * k as f64 / pieces as f64;
-        while seg + 1 < n0 && below + weight[seg] < target {
+        while seg + 1 < m && below + weight[seg] < target {
             below += weight[seg];
             seg += 1;
         }
         let f = ((target - below) / weight[seg]).clamp(0.0, 1.0);
-        ends.push(at(seg, n0) + (at(seg + 1, n0) - at(seg, n0)) * f);
+        ends.push(at(seg, m) + (at(seg + 1, m) - at(seg, m)) * f);
     }
     ends.push(t1);
     let mut out = vec![t0];
