@@ -768,7 +768,7 @@ mod tests {
         }
         // A degenerate edge, its points one point up to rounding, is not split for that.
         let noise = |t: f64| DVec3::new(1e3 + 1e-13 * (97.0 * t).sin(), 5e2, 1e-14 * t.cos());
-        let (ts, _) = curve_params(&noise, 0.0, 10.0, 2, 1e-3);
+        let (ts, _) = curve_params(noise, 0.0, 10.0, 2, 1e-3);
         assert!(ts.len() <= 3, "{} pieces for a point", ts.len() - 1);
     }
 }
