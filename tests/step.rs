@@ -2002,8 +2002,8 @@ fn a_helix_coarser_than_its_radius_keeps_its_turn_in_the_trim_loop() {
 
 /// gen-35-41-thread (seed 35 model 41 reduced to its part 0, a thread of radius 8.865 and
 /// pitch 2.228 over 8.36 turns; `tests/data/step/gen-35-41-thread.json`), at T 6.38 mm (2 % of
-/// the whole model's diagonal). The edges along the flank (#884 and its twins) are B-splines
-/// of 55 spans; cut in two halves of 4.18 turns, each half's samples, 1.05 turns apart, lay
+/// the whole model's diagonal). The edges along the flank are B-splines of degree 11 in 8
+/// spans; cut in two halves of 4.18 turns, each half's samples, 1.05 turns apart, lay
 /// within 3.19 of its chord with their tangents along it, so the polyline crossed the thread
 /// in two chords and flank face #4624 was drawn off its trim (`stats` 1.39 ε, OCCT's judge on
 /// the whole model a 1.19 T). The deviation is now measured span by span.
