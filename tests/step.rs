@@ -2023,3 +2023,15 @@ fn a_long_helix_edge_is_measured_span_by_span() {
 fn a_crescent_whose_trim_polylines_cross_is_retried_until_they_do_not() {
     measured_within_with("tests/data/step/gen-36-31-crescent.step.gz", 11.1, 10, 678);
 }
+
+/// gen-4-33-sphere (seed 4 model 33 reduced to its part 2, a shelled spring's common with a
+/// sphere; `tests/data/step/gen-4-33-sphere.json`), at T 8.98 mm (2 % of the whole model's
+/// diagonal). The sphere face #982 runs round the sphere near its pole; one polyline piece of
+/// an edge passing 0.06 rad from the pole swept u by −3.4 and was unwrapped as +2.9, the loop
+/// wound round the sphere and was closed along the other pole: the face was drawn as its
+/// complement (`stats` 3.61 ε, 581 samples outside; OCCT's judge a 3.41 T). Such a piece is
+/// now split on its curve until its parameters unwrap the same way from its midpoint.
+#[test]
+fn a_piece_that_sweeps_half_a_turn_near_a_pole_is_split_until_it_unwraps() {
+    measured_within_with("tests/data/step/gen-4-33-sphere.step.gz", 8.98, 3, 982);
+}

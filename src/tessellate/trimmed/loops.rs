@@ -207,30 +207,6 @@ pub(super) fn dist_to_segment(p: DVec3, a: DVec3, b: DVec3) -> f64 {
     p.distance(a + ab * t)
 }
 
-/// `uv` shifted by whole periods to be nearest to `prev`.
-pub(super) fn unwrap_near(mut uv: DVec2, prev: DVec2, pu: Option<f64>, pv: Option<f64>) -> DVec2 {
-    if let Some(p) = pu.filter(|p| *p > 0.0) {
-        uv.x -= ((uv.x - prev.x) / p).round() * p;
-    }
-    if let Some(p) = pv.filter(|p| *p > 0.0) {
-        uv.y -= ((uv.y - prev.y) / p).round() * p;
-    }
-    uv
-}
-
-/// How many periods a closed loop winds around, per direction.
-pub(super) fn winding(lp: &[BPoint], pu: Option<f64>, pv: Option<f64>) -> (i64, i64) {
-    let (Some(f), Some(l)) = (lp.first(), lp.last()) else {
-        return (0, 0);
-    };
-    let d = l.uv - f.uv;
-    let w = |d: f64, p: Option<f64>| match p {
-        Some(p) if p > 0.0 => (d / p).round() as i64,
-        _ => 0,
-    };
-    (w(d.x, pu), w(d.y, pv))
-}
-
 /// Shifts each loop by whole periods so that it lies next to the widest loop (the outer one).
 /// Loops are unwrapped one by one from their own first point, so on a periodic surface a hole
 /// can land a period away from the outer loop's window (an outer loop over u ∈ −2π..0 and a
@@ -617,7 +593,9 @@ impl TrimmedTessellator {
             } else {
                 (e.end, e.start)
             };
+            let mut t_prev = None;
             for (i, &t) in ordered.iter().enumerate() {
+                let t_before = t_prev.replace(t);
                 let p = if i == 0 {
                     first
                 } else if i == n - 1 {
@@ -665,6 +643,10 @@ impl TrimmedTessellator {
                 let Some(mut uv) = uv else {
                     return Err(TrimError::Projection { edge: e.id });
                 };
+                if let Some(t0) = t_before {
+                    let src = (li as u32, k as u32);
+                    bridge(s, e, src, (t0, t), uv, 0, far, fine_left, &mut pts);
+                }
                 if let Some(prev) = pts.last() {
                     uv = unwrap_near(uv, prev.uv, pu, pv);
                 } else if let Some(start) = self.starts.get_mut(li) {

@@ -50,9 +50,11 @@ use crate::model::trimmed::{
 
 mod domain;
 mod loops;
+mod unwrap;
 
 use domain::Domain;
 use loops::*;
+use unwrap::*;
 
 /// Most segments one edge polyline may have.
 const MAX_EDGE_SEGMENTS: usize = 1 << 14;
@@ -201,14 +203,12 @@ impl TrimmedTessellator {
         };
         let mut border_tol = 0.5 * eps;
         let mut result = self.attempt(face, eps, border_tol, shared_borders, out);
-        // Trim polylines that cross (two edges nearer each other than their chords' ε/2: a
-        // peninsula of a face narrower than ε) leave spade's constraints out and the parity
-        // fill off; the face is tessellated again with its edges followed more closely
-        // (`BORDER_RETRIES` times, a quarter of the tolerance each), and the attempt with the
-        // fewest crossings is kept. An attempt with as many crossings does not end the
-        // retries: the corner of a crescent of plane 0.038 ε inside its arc (gen-36-31 at 5 %
-        // of the diagonal, face #1055) still crossed at ε/8 and is clear at ε/32. Not with
-        // shared borders: those points must be the neighbour's too.
+        // Trim polylines that cross (a peninsula of a face narrower than ε) leave spade's
+        // constraints out and the parity fill off; the face is tessellated again with its
+        // edges followed more closely (`BORDER_RETRIES` times, a quarter of the tolerance
+        // each), the attempt with the fewest crossings kept. As many crossings do not end the
+        // retries: a crescent's corner 0.038 ε inside its arc (gen-36-31 at 5 %, face #1055)
+        // still crossed at ε/8, clear at ε/32. Not with shared borders (the neighbour's too).
         let mut best = border_tol;
         for _ in 0..BORDER_RETRIES {
             let crossings = match &result {
