@@ -177,7 +177,11 @@ impl TrimmedFace {
 }
 
 /// `uv` shifted by whole periods to be nearest to `near`.
-fn unwrap_near(mut uv: DVec2, near: DVec2, (pu, pv): (Option<f64>, Option<f64>)) -> DVec2 {
+pub(crate) fn unwrap_near(
+    mut uv: DVec2,
+    near: DVec2,
+    (pu, pv): (Option<f64>, Option<f64>),
+) -> DVec2 {
     if let Some(p) = pu.filter(|p| *p > 0.0) {
         uv.x -= ((uv.x - near.x) / p).round() * p;
     }
