@@ -13,15 +13,10 @@ const MAX_BRIDGE_DEPTH: u32 = 8;
 /// small circles' pieces), and changed no mesh.
 const BRIDGE_CHECKED: f64 = 0.25;
 
-/// `uv` shifted by whole periods to be nearest to `prev`.
-pub(super) fn unwrap_near(mut uv: DVec2, prev: DVec2, pu: Option<f64>, pv: Option<f64>) -> DVec2 {
-    if let Some(p) = pu.filter(|p| *p > 0.0) {
-        uv.x -= ((uv.x - prev.x) / p).round() * p;
-    }
-    if let Some(p) = pv.filter(|p| *p > 0.0) {
-        uv.y -= ((uv.y - prev.y) / p).round() * p;
-    }
-    uv
+/// `uv` shifted by whole periods to be nearest to `prev` ([`crate::model::poles::unwrap_near`]
+/// with the periods apart).
+pub(super) fn unwrap_near(uv: DVec2, prev: DVec2, pu: Option<f64>, pv: Option<f64>) -> DVec2 {
+    crate::model::poles::unwrap_near(uv, prev, (pu, pv))
 }
 
 /// How many periods a closed loop winds around, per direction.
