@@ -41,6 +41,11 @@ Checks (a file fails if any does):
   Why 1.1: our export promises to be within T of the true surface; OCCT's fine
   mesh is within T/10 of it (its linear deflection), so the honest bound between
   the two meshes is T + T/10 in both directions.
+  Where OCCT gives one of its edges or vertices a tolerance beyond T, its B-rep is
+  defined only to that tolerance around it: a sample of (a) or (b) within that
+  tolerance of the edge or vertex (and, for (b), within it plus T of ours) is not
+  counted, and the report says how many were left out (gen-14-37: a fillet edge of
+  2.27 mm whose pcurve goes round a sphere's pole that its 3D curve passes by).
 
 Distances (a) and (b) are measured to the whole placed scene of the other side
 (not only to the paired instance), so they do not depend on how either side splits
@@ -595,6 +600,62 @@ class Occt:
             cache[(proto, sub)] = comp
         return cache[(proto, sub)]
 
+    def tolerant(self, proto, sub, T):
+        """The edges and vertices of a leaf shape to which OCCT gives a tolerance beyond T, as
+        (tolerance, shape), largest first: where its B-rep is defined only to that tolerance."""
+        from OCP.BRep import BRep_Tool
+        from OCP.TopAbs import TopAbs_EDGE, TopAbs_VERTEX
+        from OCP.TopExp import TopExp_Explorer
+        from OCP.TopoDS import TopoDS
+
+        cache = self.__dict__.setdefault("_tolerant", {})
+        if (proto, sub) not in cache:
+            found = []
+            for kind, cast in ((TopAbs_EDGE, TopoDS.Edge), (TopAbs_VERTEX, TopoDS.Vertex)):
+                e = TopExp_Explorer(self.protos[proto]["subs"][sub], kind)
+                while e.More():
+                    found.append((BRep_Tool.Tolerance_s(cast(e.Current())), e.Current()))
+                    e.Next()
+            cache[(proto, sub)] = sorted(found, key=lambda x: -x[0])
+        return [(t, sh) for t, sh in cache[(proto, sub)] if t > T]
+
+    def within_tolerance(self, ins, point, d, T):
+        """The tolerance of the edge or vertex of instance `ins` in whose tolerance tube the
+        world `point` lies, when `d` (its distance from OCCT's B-rep, or from ours for a sample
+        of OCCT's) is within that tolerance plus T; else None. OCCT's B-rep is defined only to
+        an edge's tolerance around it (gen-14-37: a fillet edge carries 2.27 mm as built, 0.88
+        read back, and its pcurve on a sphere goes round the pole its 3D curve passes 0.44 mm
+        from: a point within it and 0.44 mm from the face is no evidence of a fault)."""
+        from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeVertex
+        from OCP.BRepExtrema import BRepExtrema_DistShapeShape
+        from OCP.gp import gp_Pnt
+
+        near = [(t, sh) for t, sh in self.tolerant(ins["proto"], ins["sub"], T) if d <= t + T]
+        if not near:
+            return None
+        M = ins["M"]
+        q = np.linalg.solve(M[:3, :3], np.asarray(point, dtype=np.float64) - M[:3, 3])
+        v = BRepBuilderAPI_MakeVertex(gp_Pnt(*q.tolist())).Vertex()
+        for t, sh in near:
+            x = BRepExtrema_DistShapeShape(v, sh)
+            if x.IsDone() and x.Value() <= t:
+                return t
+        return None
+
+    def excuse_tolerance(self, occt_fine, inst_of, P, d, idx, T):
+        """Sets to 0 the distances `d[idx]` of samples `P[idx]` (of OCCT instances
+        `inst_of[idx]`) that lie within OCCT's tolerance of an edge or vertex
+        (`within_tolerance`). Returns how many, and the largest tolerance that excused one."""
+        n, worst = 0, 0.0
+        for i in idx:
+            if d[i] <= BOUND * T:
+                continue
+            t = self.within_tolerance(occt_fine[inst_of[i]], P[i], d[i], T)
+            if t is not None:
+                d[i] = 0.0
+                n, worst = n + 1, max(worst, t)
+        return n, worst
+
     def describe_face(self, proto, fid):
         from OCP.BRepAdaptor import BRepAdaptor_Surface
 
@@ -1003,6 +1064,16 @@ def evaluate(occt, ours, rel, T, diag, occt_fine, rng, max_samples, per_tri):
         res["a_where"] = "%s near %s at (%.4g, %.4g, %.4g)" % (
             ours[Io[Ta[k]]]["name"], occt.describe_face(occt_fine[It[ti]]["proto"], int(Fat[ti])), *Pa[k])
         res["a_where"] += " [checked %d samples on the exact B-rep: %d lie on it (OCCT mesh hole)]" % (len(chk), res["a_false"])
+        n, t = occt.excuse_tolerance(occt_fine, It[tria], Pa, da, chk, T)
+        if n:
+            res["a_tolerance"] = n
+            res["a_exceed"] = int((da > BOUND * T).sum())
+            k = int(np.argmax(da))
+            res["a_over_T"] = float(da[k] / T)
+            ti = int(tria[k])
+            res["a_where"] = "%s near %s at (%.4g, %.4g, %.4g)" % (
+                ours[Io[Ta[k]]]["name"], occt.describe_face(occt_fine[It[ti]]["proto"], int(Fat[ti])), *Pa[k])
+            res["a_where"] += " [%d samples within OCCT's own tolerance of an edge or vertex (up to %.3g mm), not counted]" % (n, t)
     if occt.unmeshed:
         res["fail_note"] = "OCCT's BRepMesh left %d faces unmeshed (%s); points sampled on those faces stand in for (a) and they are not judged in (b)" % (
             len(occt.unmeshed), ", ".join(occt.describe_face(p, f) for p, f in occt.unmeshed[:3]))
@@ -1036,12 +1107,16 @@ def evaluate(occt, ours, rel, T, diag, occt_fine, rng, max_samples, per_tri):
         lex = ex[(ex > 0.1 * T) & (ex <= 0.5 * T)]
         res["b_occt_loose"] = int(len(loose))
         db[loose] = np.where(db[loose] <= T + lex, np.minimum(db[loose], BOUND * T), db[loose])
+        n, t = occt.excuse_tolerance(occt_fine, It[Tb], Pb, db, chk, T)
         res["b_exceed"] = int((db > BOUND * T).sum())
         k = int(np.argmax(db))
         res["b_over_T"] = float(db[k] / T)
         tb = int(Tb[k])
         res["b_where"] = "%s at (%.4g, %.4g, %.4g), nearest ours %s" % (
             occt.describe_face(occt_fine[It[tb]]["proto"], int(Fat[tb])), *Pb[k], ours[Io[int(trib[k])]]["name"])
+        if n:
+            res["b_tolerance"] = n
+            res["b_where"] += " [%d samples within OCCT's own tolerance of an edge or vertex (up to %.3g mm), not counted]" % (n, t)
     # faces (OCCT) with most exceeding samples, for (b) — missing faces show up here
     if res["b_exceed"]:
         over = np.nonzero(db > BOUND * T)[0]
@@ -1388,6 +1463,47 @@ def self_test(args):
     else:
         log("  grow the biggest face 3T past its border: FAILED (the face has no border edge)")
         results.append(False)
+    # (6) OCCT's tolerance excuses a sample only in the tube of the tolerant edge and only by
+    # that tolerance (`within_tolerance`): the edge of OCCT's part nearest the biggest face's
+    # longest border edge is given a tolerance, and of the samples of the face displaced by 3T,
+    # most are excused by a tube holding the part, fewer by a tube 10T wide (the face is
+    # larger), none by a tolerance of 1.5T (below the 3T moved).
+    if len(border):
+        from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeVertex
+        from OCP.BRepExtrema import BRepExtrema_DistShapeShape
+        from OCP.TopAbs import TopAbs_EDGE
+        from OCP.TopExp import TopExp_Explorer
+        from OCP.gp import gp_Pnt
+
+        M = ins["M"]
+        q = np.linalg.solve(M[:3, :3], 0.5 * (a + b) - M[:3, 3])
+        v = BRepBuilderAPI_MakeVertex(gp_Pnt(*q.tolist())).Vertex()
+        e, edge = TopExp_Explorer(occt.protos[ins["proto"]]["subs"][ins["sub"]], TopAbs_EDGE), None
+        while e.More():
+            x = BRepExtrema_DistShapeShape(v, e.Current()).Value()
+            if edge is None or x < edge[0]:
+                edge = (x, e.Current())
+            e.Next()
+        V = V0.copy()
+        V[np.unique(sel)] += 3 * T * nrm
+        mut = list(coarse)
+        mut[k] = dict(ins, V=V)
+        ours = roundtrip(mut)
+
+        def exceeding(tol):
+            occt.__dict__["_tolerant"] = {(ins["proto"], ins["sub"]): [(tol, edge[1])] if tol else []}
+            r = evaluate(occt, ours, rel, T, diag, fine, np.random.default_rng(1), args.max_samples, 4)
+            return r.get("a_exceed", 0)
+
+        n0, wide, low, tube = exceeding(0.0), exceeding(10 * diag), exceeding(1.5 * T), exceeding(10 * T)
+        occt.__dict__.pop("_tolerant")
+        # Excused: most of them in a tube holding the part; in a 10T tube, at most the part of
+        # the face within 10T of the edge; with 1.5T, none.
+        ok6 = wide < n0 / 2 and low == n0 and wide < tube < n0
+        log("  displace the biggest face 3T, an edge of OCCT's given a tolerance: samples over 1.1 T %d; with a tube "
+            "holding the part %d (must be below half), a tube 10T wide %d (between), a tolerance of 1.5T %d (all)  %s" % (
+                n0, wide, tube, low, "ok" if ok6 else "WRONG"))
+        results.append(ok6)
     # A generated model is judged as built: the round trip that changes seed 7 model 6's
     # sphere face (its hole covered twice when read back, part 1) must be seen.
     sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
