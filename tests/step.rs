@@ -2036,6 +2036,19 @@ fn a_piece_that_sweeps_half_a_turn_near_a_pole_is_split_until_it_unwraps() {
     measured_within_with("tests/data/step/gen-4-33-sphere.step.gz", 8.98, 3, 982);
 }
 
+/// gen-43-42-spheres (seed 43 model 42 reduced to its part: a sphere of 293.6° fused with a
+/// whole sphere and a box; `tests/data/step/gen-43-42-spheres.json`), at T 1.51 mm (3e-3 of
+/// the whole model's diagonal). The whole sphere's face #485 is bounded by a `VERTEX_LOOP` at
+/// its pole and two holes; one hole's edges pass 0.045 rad from each pole, where 16 points per
+/// edge step over a radian of angle about the axis. The seam, placed in the widest gap between
+/// the loops' points, ran through that hole, and the face was drawn across it (`stats`
+/// 11.97 ε, 1 111 samples outside; OCCT's judge a 11.11 T). The gap is now the widest arc no
+/// step between two points sweeps.
+#[test]
+fn a_sphere_seam_is_placed_clear_of_the_angles_a_hole_sweeps_beside_a_pole() {
+    measured_within_with("tests/data/step/gen-43-42-spheres.step.gz", 1.51, 10, 485);
+}
+
 /// SOT23 (corpus), face #1915: a circle revolved about an axis it touches, a corner bounded by
 /// three edges, one through the pole. The measure's loop comes back from the pole on the other
 /// sheet; the rest of its last edge, split between the loop's end and its first point as

@@ -129,13 +129,17 @@ fn signed_area(pts: &[(f64, f64)]) -> f64 {
         .sum::<f64>()
 }
 
-/// Where a sphere's seam can run clear of holes: the u of the middle of the widest gap
-/// between the loops' points seen around the sphere's axis (its poles are the ends of its v
-/// range; 16 points per edge), and the loops' orientation. `None` when a loop runs around
-/// the axis (it bounds a cap, not a hole) or the surface has no v range.
+/// Where a sphere's seam can run clear of holes: the u of the middle of the widest arc of
+/// angles about the sphere's axis that no loop crosses (its poles are the ends of its v range;
+/// 16 points per edge, each step between two of them covering the angles it sweeps the short
+/// way round: beside a pole a step sweeps a radian or more, and the points alone left a gap
+/// there that the loop crosses, generated model gen-43-42), and the loops' orientation. `None`
+/// when a loop runs around the axis (it bounds a cap, not a hole), the surface has no v range
+/// or the loops cross every angle.
 pub(super) fn seam_clear_of(surface: &TruckSurface, loops: &[Vec<LoopEdge>]) -> Option<ClearSeam> {
     let frame = AxisFrame::of(surface)?;
-    let mut all = Vec::new();
+    // The arcs of angle the loops sweep, as (start, length), start in 0..2π.
+    let mut swept = Vec::new();
     let mut area = Some(0.0);
     for lp in loops {
         let angles = frame.loop_angles(lp);
@@ -147,19 +151,37 @@ pub(super) fn seam_clear_of(surface: &TruckSurface, loops: &[Vec<LoopEdge>]) -> 
         let clear =
             angles.len() == 16 * lp.len() && angle_steps(&angles).all(|d| d.abs() < 0.25 * TAU);
         area = area.filter(|_| clear).map(|a| a + signed_area(&angles));
-        all.extend(angles.iter().map(|a| a.0));
+        swept.extend(
+            angles
+                .iter()
+                .zip(angle_steps(&angles))
+                .map(|(a, d)| ((a.0 + d.min(0.0)).rem_euclid(TAU), d.abs())),
+        );
     }
-    all.sort_by(f64::total_cmp);
-    let first = *all.first()?;
-    let (gap, at) = all
-        .iter()
-        .zip(all.iter().skip(1).chain(std::iter::once(&(first + TAU))))
-        .map(|(a, b)| (b - a, 0.5 * (a + b)))
-        .max_by(|a, b| a.0.total_cmp(&b.0))?;
+    let (gap, at) = widest_gap(&mut swept)?;
     (gap > 0.0).then(|| ClearSeam {
         at: at.rem_euclid(TAU),
         signed_area: area,
     })
+}
+
+/// The widest arc of the circle that none of the arcs `swept` ((start in 0..2π, length up to
+/// π)) covers: its length (0 where they cover every angle) and the angle of its middle.
+/// `None` when there are no arcs.
+fn widest_gap(swept: &mut [(f64, f64)]) -> Option<(f64, f64)> {
+    swept.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let first = swept.first()?.0;
+    // Walking from the first start once round: `reach` is the farthest angle covered so far
+    // (at first, by the arcs that wrap past 2π), and a start beyond it opens a gap from it.
+    let mut reach = swept.iter().map(|a| a.0 + a.1 - TAU).fold(first, f64::max);
+    let mut best = (0.0, first);
+    for &(start, length) in swept.iter().chain(std::iter::once(&(first + TAU, 0.0))) {
+        if start - reach > best.0 {
+            best = (start - reach, 0.5 * (start + reach));
+        }
+        reach = reach.max(start + length);
+    }
+    Some(best)
 }
 
 /// Whether `surface` is a sphere (the one surface [`whole_surface_loop`] bounds).
@@ -206,4 +228,24 @@ pub(super) fn whole_surface_loop(
         })
         .collect();
     (lp.len() == 2).then_some(lp)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_widest_gap_is_between_the_arcs_the_steps_sweep() {
+        // Points at 0.1, 3.0 and 6.0 alone leave 2.9 between 3.0 and 6.0; the steps sweep
+        // 3.0..4.5 and, past 2π, 6.0..0.8.
+        let mut arcs = [(0.1, 0.1), (3.0, 1.5), (6.0, 1.1)];
+        let (gap, at) = widest_gap(&mut arcs).expect("arcs were given");
+        let tail = 6.0 + 1.1 - TAU;
+        assert!((gap - (3.0 - tail)).abs() < 1e-12, "{gap}");
+        assert!((at - 0.5 * (3.0 + tail)).abs() < 1e-12, "{at}");
+        // Arcs covering every angle leave no gap.
+        let mut all = [(0.0, 3.0), (2.5, 3.0), (5.0, 2.0)];
+        assert_eq!(widest_gap(&mut all).map(|g| g.0), Some(0.0));
+        assert!(widest_gap(&mut []).is_none());
+    }
 }
