@@ -1454,11 +1454,11 @@ def self_test(args):
     else:
         log("  grow the biggest face 3T past its border: FAILED (the face has no border edge)")
         results.append(False)
-    # (6) OCCT's tolerance excuses a sample only in the tube of the tolerant edge and only by
-    # that tolerance (`within_tolerance`): the edge of OCCT's part nearest the biggest face's
-    # longest border edge is given a tolerance, and of the samples of the face displaced by 3T,
-    # most are excused by a tube holding the part, fewer by a tube 10T wide (the face is
-    # larger), none by a tolerance of 1.5T (below the 3T moved).
+    # (6) OCCT's tolerance excuses a sample only in the tube of the tolerant edge
+    # (`within_tolerance`): the edge of OCCT's part nearest the biggest face's
+    # longest border edge is given a tolerance of 10T, and of the samples of the face displaced
+    # by 3T, some are excused, but not most: the face is larger than the tube. (Two
+    # evaluations at 20 000 samples: each costs CI time.)
     if len(border):
         from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeVertex
         from OCP.BRepExtrema import BRepExtrema_DistShapeShape
@@ -1483,17 +1483,15 @@ def self_test(args):
 
         def exceeding(tol):
             occt.__dict__["_tolerant"] = {(ins["proto"], ins["sub"]): [(tol, edge[1])] if tol else []}
-            r = evaluate(occt, ours, rel, T, diag, fine, np.random.default_rng(1), args.max_samples, 4)
+            r = evaluate(occt, ours, rel, T, diag, fine, np.random.default_rng(1), min(args.max_samples, 20000), 4)
             return r.get("a_exceed", 0)
 
-        n0, wide, low, tube = exceeding(0.0), exceeding(10 * diag), exceeding(1.5 * T), exceeding(10 * T)
+        n0, tube = exceeding(0.0), exceeding(10 * T)
         occt.__dict__.pop("_tolerant")
-        # Excused: most of them in a tube holding the part; in a 10T tube, at most the part of
-        # the face within 10T of the edge; with 1.5T, none.
-        ok6 = wide < n0 / 2 and low == n0 and wide < tube < n0
-        log("  displace the biggest face 3T, an edge of OCCT's given a tolerance: samples over 1.1 T %d; with a tube "
-            "holding the part %d (must be below half), a tube 10T wide %d (between), a tolerance of 1.5T %d (all)  %s" % (
-                n0, wide, tube, low, "ok" if ok6 else "WRONG"))
+        # Excused in a 10T tube: some, at most the part of the face within 10T of the edge.
+        ok6 = n0 / 2 < tube < n0
+        log("  displace the biggest face 3T, an edge of OCCT's given a tolerance: samples over 1.1 T %d, with a tube "
+            "10T wide %d (must be fewer, but over half)  %s" % (n0, tube, "ok" if ok6 else "WRONG"))
         results.append(ok6)
     # A generated model is judged as built: the round trip that changes seed 7 model 6's
     # sphere face (its hole covered twice when read back, part 1) must be seen.
