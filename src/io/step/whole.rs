@@ -236,7 +236,7 @@ mod tests {
 
     #[test]
     fn the_widest_gap_is_between_the_arcs_the_steps_sweep() {
-        // Points at 0.1, 3.0 and 6.0 alone leave 2.9 between 3.0 and 6.0; the steps sweep
+        // Points at 0.1, 3.0 and 6.0 alone leave 3.0 between 3.0 and 6.0; the steps sweep
         // 3.0..4.5 and, past 2π, 6.0..0.8.
         let mut arcs = [(0.1, 0.1), (3.0, 1.5), (6.0, 1.1)];
         let (gap, at) = widest_gap(&mut arcs).expect("arcs were given");
