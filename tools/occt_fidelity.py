@@ -505,18 +505,26 @@ class Occt:
                         "sub": ins["sub"], "M": M})
         return out
 
+    @staticmethod
+    def _in_part(ins, point):
+        """A world point in the frame of instance `ins`'s part: its coordinates and a vertex
+        there (for BRepExtrema)."""
+        from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeVertex
+        from OCP.gp import gp_Pnt
+
+        M = ins["M"]
+        q = np.linalg.solve(M[:3, :3], np.asarray(point, dtype=np.float64) - M[:3, 3])
+        return q, BRepBuilderAPI_MakeVertex(gp_Pnt(*q.tolist())).Vertex()
+
     def brep_distance(self, ins, point, far=float("inf")):
         """Exact distance from a world point to an instance's B-rep (BRepExtrema); where that
         exceeds `far`, also to the faces' surfaces at feet inside the faces (see
         `_surface_distance`)."""
-        from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeVertex
         from OCP.BRepExtrema import BRepExtrema_DistShapeShape
-        from OCP.gp import gp_Pnt
 
-        M = ins["M"]
-        q = np.linalg.solve(M[:3, :3], np.asarray(point, dtype=np.float64) - M[:3, 3])  # into the part's frame
+        q, v = self._in_part(ins, point)
         shape = self._boundary(ins["proto"], ins["sub"])
-        d = BRepExtrema_DistShapeShape(BRepBuilderAPI_MakeVertex(gp_Pnt(*q.tolist())).Vertex(), shape)
+        d = BRepExtrema_DistShapeShape(v, shape)
         best = d.Value() if d.IsDone() else float("nan")
         if not best <= far:  # also when BRepExtrema failed (nan)
             best = min(best if best == best else np.inf, self._surface_distance(ins["proto"], q, best))
@@ -626,16 +634,12 @@ class Occt:
         an edge's tolerance around it (gen-14-37: a fillet edge carries 2.27 mm as built, 0.88
         read back, and its pcurve on a sphere goes round the pole its 3D curve passes 0.44 mm
         from: a point within it and 0.44 mm from the face is no evidence of a fault)."""
-        from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeVertex
         from OCP.BRepExtrema import BRepExtrema_DistShapeShape
-        from OCP.gp import gp_Pnt
 
         near = [(t, sh) for t, sh in self.tolerant(ins["proto"], ins["sub"], T) if d <= t + T]
         if not near:
             return None
-        M = ins["M"]
-        q = np.linalg.solve(M[:3, :3], np.asarray(point, dtype=np.float64) - M[:3, 3])
-        v = BRepBuilderAPI_MakeVertex(gp_Pnt(*q.tolist())).Vertex()
+        _, v = self._in_part(ins, point)
         for t, sh in near:
             x = BRepExtrema_DistShapeShape(v, sh)
             if x.IsDone() and x.Value() <= t:
@@ -1420,6 +1424,7 @@ def self_test(args):
     V[np.unique(sel)] += 3 * T * nrm
     mut = list(coarse)
     mut[k] = dict(ins, V=V)
+    displaced = mut
     results.append(check("displace the biggest face by 3T", mut, ["a"]))
     # (4) a small dent, each way: 5 % of the biggest face moved by 3T. One of the two moves into
     # the solid, where the distance to the solid (not to its faces) is 0, and the exact check of
@@ -1460,26 +1465,18 @@ def self_test(args):
     # by 3T, some are excused, but not most: the face is larger than the tube. (Two
     # evaluations at 20 000 samples: each costs CI time.)
     if len(border):
-        from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeVertex
         from OCP.BRepExtrema import BRepExtrema_DistShapeShape
         from OCP.TopAbs import TopAbs_EDGE
         from OCP.TopExp import TopExp_Explorer
-        from OCP.gp import gp_Pnt
 
-        M = ins["M"]
-        q = np.linalg.solve(M[:3, :3], 0.5 * (a + b) - M[:3, 3])
-        v = BRepBuilderAPI_MakeVertex(gp_Pnt(*q.tolist())).Vertex()
+        _, v = Occt._in_part(ins, 0.5 * (a + b))
         e, edge = TopExp_Explorer(occt.protos[ins["proto"]]["subs"][ins["sub"]], TopAbs_EDGE), None
         while e.More():
             x = BRepExtrema_DistShapeShape(v, e.Current()).Value()
             if edge is None or x < edge[0]:
                 edge = (x, e.Current())
             e.Next()
-        V = V0.copy()
-        V[np.unique(sel)] += 3 * T * nrm
-        mut = list(coarse)
-        mut[k] = dict(ins, V=V)
-        ours = roundtrip(mut)
+        ours = roundtrip(displaced)  # case (3)'s mutation
 
         def exceeding(tol):
             occt.__dict__["_tolerant"] = {(ins["proto"], ins["sub"]): [(tol, edge[1])] if tol else []}
