@@ -440,3 +440,70 @@ fn a_b_spline_dome_is_measured_and_covered_up_to_its_tip() {
     let (miss, at) = uncovered(&samples, &pos, &tris);
     assert!(miss <= eps, "the mesh misses the face by {miss} at {at}");
 }
+
+/// gen-45-9-cone-band (seed 45 model 9, whole: a wide cone, r 32.0 to 6.25 over 1.03, shelled
+/// inwards by 0.656; written in metres): Open CASCADE's shell left the top plane #127 an
+/// annulus 0.026 mm wide in plan, from the small circle (r 6.253) on the plane to the inner
+/// cone's circle (r 6.227) 0.655 mm below it (the edge's own tolerance in OCCT). The mesh
+/// follows both edges, so its triangles span the two; their chords of the outer circle cut
+/// 0.13 mm into the hole in plan, and samples there, outside the trim, were judged by their
+/// distance to the edges alone: up to half the offset (`stats` 1.26 ε with 90 samples
+/// outside at T 0.277 mm, where OCCT's judge measured 1.10 T). Outside the trim, as inside,
+/// the error now counts beyond the edges' own offset at the sample's place (interpolated from
+/// the triangle's corners on the edges). The same band with its lower edge's vertices pulled
+/// 3 T towards the axis (off the edge: no offset allowed there) must still fail.
+#[test]
+fn a_band_between_an_edge_on_a_plane_and_one_off_it_is_judged_beyond_the_offset() {
+    let path = common::root().join("tests/data/step/gen-45-9-cone-band.step.gz");
+    let scene = patchwork::prep::load(&path).expect("loads");
+    let tol = 0.2773;
+    let mut meshes = patchwork::tessellate::tessellate_scene_tolerance(&scene, tol);
+    let band = |meshes: &[PatchMesh]| {
+        patchwork::check::fidelity::measure_meshes(&scene, meshes)
+            .into_iter()
+            .find(|(_, f)| f.face == 127)
+            .expect("face #127 is measured")
+    };
+    let (patch, plane) = band(&meshes);
+    // (Face units: the file's metres, as `eps` is.)
+    assert!(
+        plane.edge_offset > 2.0 * plane.eps,
+        "the band's lower edge lies {} off the plane (ε {})",
+        plane.edge_offset,
+        plane.eps
+    );
+    assert!(
+        plane.ratio() <= 1.0 && plane.outside == 0,
+        "face #127: error/tol {} ({} samples outside)",
+        plane.ratio(),
+        plane.outside
+    );
+    // The axis and the plane's height, from the mesh: its vertices lie on the two circles.
+    let m = &mut meshes[patch as usize];
+    let top = m.positions.iter().map(|p| p.z).fold(f32::MIN, f32::max);
+    let lower: Vec<usize> = (0..m.positions.len())
+        .filter(|&i| m.positions[i].z < top - 0.3)
+        .collect();
+    assert!(
+        lower.len() >= 8,
+        "{} vertices on the lower edge",
+        lower.len()
+    );
+    let n = m.positions.len() as f32;
+    let axis = m
+        .positions
+        .iter()
+        .fold(glam::Vec2::ZERO, |s, p| s + p.truncate() / n);
+    for &i in &lower {
+        let p = m.positions[i];
+        let inward = (axis - p.truncate()).normalize() * (3.0 * tol) as f32;
+        m.positions[i] = p + inward.extend(0.0);
+    }
+    let (_, pulled) = band(&meshes);
+    assert!(
+        pulled.ratio() > 2.0 && pulled.outside > 0,
+        "pulled 3 T into the hole: error/tol {} ({} samples outside)",
+        pulled.ratio(),
+        pulled.outside
+    );
+}
