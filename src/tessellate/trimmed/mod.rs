@@ -25,12 +25,11 @@
 //!    error metric — one unit per grid step, so a unit cell holds ε and triangles stretch along
 //!    directions that do not curve (a cylinder's axis); a flat face is scaled by its mean
 //!    speeds |S_u|, |S_v| instead. Triangles outside the domain are dropped (parity across
-//!    the constraint edges).
+//!    the constraint edges; where constraints cross, by their centroids, a sliver's by its
+//!    3D side: `domain::inside_faces`).
 //! 5. **Measured error** — the distance between the surface and the triangle at 7 samples per
 //!    triangle (centroid, edge midpoints, inner points); triangles above ε get their centroid
 //!    inserted, for a few rounds. The maximum measured is returned with the mesh.
-
-use std::collections::VecDeque;
 
 use glam::{DVec2, DVec3, Vec3};
 use spade::handles::FixedVertexHandle;
@@ -363,7 +362,8 @@ impl TrimmedTessellator {
         let mut vertex_cap = MAX_VERTICES;
         for round in 0..=REFINE_ROUNDS {
             tris.clear();
-            let inside_faces = self.inside_faces(&cdt, &domain, use_parity);
+            let inside_faces =
+                domain::inside_faces(&cdt, &self.uvs, &self.pos, &domain, use_parity, s, scale);
             let mut worst = 0.0f64;
             let mut to_insert = Vec::new();
             for t in inside_faces {
@@ -517,65 +517,6 @@ impl TrimmedTessellator {
             self.off.push(if off.is_finite() { off } else { 0.0 });
         }
         Ok(h)
-    }
-
-    /// Triangles of the CDT inside the domain, as vertex indices.
-    fn inside_faces(&self, cdt: &Cdt, domain: &Domain<'_>, use_parity: bool) -> Vec<[u32; 3]> {
-        let tri_of = |f: spade::handles::FaceHandle<'_, spade::handles::InnerTag, _, _, _, _>| {
-            let v = f.vertices();
-            [
-                v[0].fix().index() as u32,
-                v[1].fix().index() as u32,
-                v[2].fix().index() as u32,
-            ]
-        };
-        if !use_parity {
-            return cdt
-                .inner_faces()
-                .filter(|f| {
-                    let t = tri_of(*f);
-                    let c = (self.uvs[t[0] as usize]
-                        + self.uvs[t[1] as usize]
-                        + self.uvs[t[2] as usize])
-                        / 3.0;
-                    domain.contains(c)
-                })
-                .map(tri_of)
-                .collect();
-        }
-        // Flood fill from the hull: parity flips across every constraint edge.
-        let n = cdt.num_all_faces();
-        let mut state: Vec<u8> = vec![2; n]; // 0 outside, 1 inside, 2 unknown
-        let mut queue = VecDeque::new();
-        for e in cdt.convex_hull() {
-            // `e` has the outer face on its left; its twin's face is inner.
-            let inner = e.rev().face();
-            if let Some(f) = inner.as_inner() {
-                let idx = f.fix().index();
-                if state[idx] == 2 {
-                    state[idx] = u8::from(e.is_constraint_edge());
-                    queue.push_back(f.fix());
-                }
-            }
-        }
-        while let Some(fh) = queue.pop_front() {
-            let f = cdt.face(fh);
-            let s0 = state[fh.index()];
-            for e in f.adjacent_edges() {
-                let other = e.rev().face();
-                if let Some(o) = other.as_inner() {
-                    let idx = o.fix().index();
-                    if state[idx] == 2 {
-                        state[idx] = if e.is_constraint_edge() { 1 - s0 } else { s0 };
-                        queue.push_back(o.fix());
-                    }
-                }
-            }
-        }
-        cdt.inner_faces()
-            .filter(|f| state[f.fix().index()] == 1)
-            .map(tri_of)
-            .collect()
     }
 
     /// Area of the triangles `tris` (3D, their vertices' positions).
