@@ -2084,3 +2084,16 @@ fn slivers_along_a_cone_circle_are_not_drawn_over_the_hole() {
         measured_within_with(path, tol, 4, 162);
     }
 }
+
+/// gen-49-41's variable fillet (seed 49 model 41, face #2369 there, #17 alone): a rational
+/// B-spline whose v knots run 92.57..93.16. The reader probed every surface for finite points at
+/// (0, 0), (½, ½) and (1, 1); outside its knots this one's weights are all zero, so it read NaN
+/// and the face was skipped ("the surface has non-finite parameters"; the file alone drew
+/// nothing). The probe now stays inside the surface's own parameter range.
+#[test]
+fn a_rational_b_spline_with_knots_far_from_zero_is_drawn() {
+    let path = "tests/data/step/gen-49-41-fillet.step.gz";
+    for tol in [0.0146, 0.0974] {
+        measured_within_with(path, tol, 1, 17);
+    }
+}

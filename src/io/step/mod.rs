@@ -647,9 +647,15 @@ fn convert_face(
 
 fn surface_is_finite(s: &TruckSurface) -> bool {
     use crate::model::trimmed::SurfaceEval;
-    [(0.0, 0.0), (0.5, 0.5), (1.0, 1.0)]
-        .iter()
-        .all(|&(u, v)| s.point(glam::DVec2::new(u, v)).is_finite())
+    // At the ends and middle of its parameter range where it has one (a B-spline's knots
+    // need not cover [0, 1]: generated model gen-49-41's v knots run 92.57..93.16, and its
+    // face was skipped as having non-finite parameters), else of [0, 1].
+    let (u, v) = crate::model::trimmed::parameter_bounds(s);
+    let (u, v) = (u.unwrap_or((0.0, 1.0)), v.unwrap_or((0.0, 1.0)));
+    [0.0, 0.5, 1.0].iter().all(|&t| {
+        let uv = glam::DVec2::new(u.0 + t * (u.1 - u.0), v.0 + t * (v.1 - v.0));
+        s.point(uv).is_finite()
+    })
 }
 
 /// The surface entity of face `face`: `ADVANCED_FACE(name, bounds, #surface, sense)`, also
