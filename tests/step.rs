@@ -2097,3 +2097,82 @@ fn a_rational_b_spline_with_knots_far_from_zero_is_drawn() {
         measured_within_with(path, tol, 1, 17);
     }
 }
+
+/// gen-46-47-pipe (seed 46 model 47 reduced to its part 2, a spring fused with a cone and
+/// offset by 1.016; see `tests/data/step/README.md`): OCCT's offset left face #441, an
+/// `OFFSET_SURFACE` of the pipe's rational B-spline (v 0..34), whose loop is the pipe's end
+/// circle and a seam run out to v 1.24 and back. The face is that band of the tube (radius
+/// 2.156 about the pipe's axis); the loop was closed at the end of v's range and the whole
+/// pipe drawn, 28.9 mm past it (OCCT's judge a 178 T at 3e-3 of the diagonal). Closed at the
+/// seam's far end, every vertex lies within the tube's diameter (+ T) of the seam, and the
+/// measure, which closes such a loop there too, finds every face within T. (Open CASCADE
+/// itself draws nothing for this face: its mesher leaves it without triangles, and its box of
+/// the part holds the end circle alone, so its box is no criterion here.)
+#[test]
+fn a_band_bounded_by_a_circle_and_a_seam_run_out_and_back_ends_at_the_seam() {
+    let path = "tests/data/step/gen-46-47-pipe.step.gz";
+    let tol = 0.138;
+    let (scene, _) = healed_model(path);
+    let meshes = tessellate_scene_tolerance(&scene, tol);
+    // The seam edge #446 from v 0 to v 1.24 (its points as the file's curve gives them).
+    let seam = [
+        [10.539, -0.177, 2.140],
+        [10.524, 0.595, 2.277],
+        [10.452, 1.365, 2.414],
+        [10.324, 2.127, 2.551],
+        [10.140, 2.877, 2.687],
+        [9.902, 3.612, 2.824],
+        [9.611, 4.328, 2.961],
+        [9.268, 5.020, 3.097],
+        [8.876, 5.686, 3.234],
+    ]
+    .map(glam::DVec3::from);
+    let reach = 2.0 * 2.156 + tol;
+    let mut farthest: f64 = 0.0;
+    for m in &meshes {
+        for p in &m.positions {
+            let p = p.as_dvec3();
+            let d = seam
+                .windows(2)
+                .map(|w| {
+                    let (a, ab) = (w[0], w[1] - w[0]);
+                    let t = ((p - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0);
+                    p.distance(a + t * ab)
+                })
+                .fold(f64::INFINITY, f64::min);
+            farthest = farthest.max(d);
+            assert!(
+                d <= reach,
+                "patch {}: vertex {p} lies {d} from the seam (the band reaches {reach})",
+                m.patch_id
+            );
+        }
+    }
+    assert!(farthest > 0.5 * reach, "the band is drawn ({farthest})");
+    measured_within_with(path, tol, 3, 441);
+}
+
+/// gen-2-39 (seed 2 model 39, a loft of star sections shelled inwards): its offset face #1307
+/// is bounded by a bottom curve, a seam run up to the top and a degenerate edge there. The
+/// seam's far end was first taken as the seam point farthest from the loop's first point;
+/// this loop starts at the top, so the bottom was taken, the loop closed across there and the
+/// face drawn as a sliver (`stats` at T 0.249: 12.5 ε, 38 samples outside). A dead end is a
+/// seam end beyond every other edge (`model::seam`): this seam has none, and the face is
+/// closed as before.
+#[test]
+fn a_seam_with_an_edge_at_each_end_is_no_dead_end() {
+    let path = "models/generated/gen-2-39.step";
+    let (scene, _) = healed_model(path);
+    let meshes = tessellate_scene_tolerance(&scene, 0.249);
+    let faces = patchwork::check::fidelity::measure_meshes(&scene, &meshes);
+    let (_, f) = faces
+        .iter()
+        .find(|(_, f)| f.face == 1307)
+        .expect("face #1307 is measured");
+    assert!(
+        f.ratio() < 1.2 && f.outside == 0,
+        "face #1307: error/tol {} ({} samples outside)",
+        f.ratio(),
+        f.outside
+    );
+}

@@ -13,6 +13,7 @@ pub mod merge;
 pub mod mesh;
 pub mod nurbs;
 pub mod poles;
+pub(crate) mod seam;
 pub mod select;
 pub mod trimmed;
 

@@ -175,15 +175,18 @@ impl Boundary {
             // start, was flagged a seam; even-odd skipped it, and a mesh sample below it,
             // inside the face, was read 1.87 ε outside).
             let mut last_seam = false;
+            // Every point projected, repeats too (a degenerate edge's): for `closure`.
+            let mut marks = Vec::with_capacity(pts.len());
             for &(p, seam, at) in &pts {
                 let Some(mut uv) = face.project_along_in(p, prev, far, &mut fine_left, grid) else {
                     continue;
                 };
                 if let Some(q) = prev {
                     uv = unwrap_near(uv, q, periods);
-                    if uv.distance_squared(q) == 0.0 {
-                        continue;
-                    }
+                }
+                marks.push((uv, seam));
+                if prev.is_some_and(|q| uv.distance_squared(q) == 0.0) {
+                    continue;
                 }
                 // Between two points of one edge: split where the chord in parameter space
                 // strays from the curve on the surface (a nearly straight edge on a torus
@@ -241,11 +244,17 @@ impl Boundary {
             }
             // Through a pole the loop runs along the pole line (no boundary in 3D: a segment
             // flagged like a seam), on the sheet where the face lies on its `domain_left`.
-            if poles::expand_poles(face, &mut out) {
+            let through_pole = poles::expand_poles(face, &mut out);
+            if through_pole {
                 sheets.extend(sheet_sides(face, &out));
             }
             if let (Some(&first), Some(&(_, last, _))) = (out.first(), out.last()) {
-                out.push((first.0, unwrap_near(first.1, last, periods), false));
+                let close = unwrap_near(first.1, last, periods);
+                if through_pole
+                    || !super::closure::seam_closure(face, &mut out, &marks, close, periods, tol)
+                {
+                    out.push((first.0, close, false));
+                }
                 loops.push(out);
             }
         }

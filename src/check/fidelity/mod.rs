@@ -47,6 +47,7 @@ use crate::model::trimmed::{CoarseGrid, SurfaceEval, TrimmedFace};
 use crate::tessellate::PatchMesh;
 
 mod boundary;
+mod closure;
 mod segment_index;
 mod triangle_grid;
 

@@ -266,14 +266,16 @@ pub(super) fn close_wrapping_loops(
             // The loop runs from `first` to `first + w·P`; close it on the side of the domain.
             let end =
                 first.uv + DVec2::new(wu as f64 * pu.unwrap_or(0.0), wv as f64 * pv.unwrap_or(0.0));
-            // A cone's loop is closed at its apex (truck reports a nominal range for cones),
-            // unless it runs out along a seam (an edge it uses both ways) away from its first
-            // point, to a vertex where no edge runs round: closed at the seam's far end then,
-            // as Open CASCADE closes its parameter-space wire (generated model gen-4-17, a
-            // wide cone between a circle of radius 3.5 and a seam to radius 43.2, was drawn as
-            // the disc inside the circle and a sliver along the seam). A tip's seam ends at
-            // the apex; a loop without a seam (an oblique cut of a tip) keeps the apex.
-            // Otherwise at the end of the range on the side of the domain.
+            // A loop that runs out along a seam (an edge it uses both ways) away from its
+            // first point, to a vertex where no edge runs round, is closed at the seam's far
+            // end, as Open CASCADE closes its parameter-space wire: generated model gen-4-17,
+            // a wide cone between a circle of radius 3.5 and a seam to radius 43.2, was drawn
+            // as the disc inside the circle and a sliver along the seam; gen-46-47, the offset
+            // of a spring's pipe (a NURBS of v range 0..34) between its end circle and a seam
+            // to v 1.24, as the whole pipe, 28.9 mm past OCCT's part. Without such a seam, a
+            // cone's loop is closed at its apex (truck reports a nominal range for cones; a
+            // tip's seam ends at the apex, an oblique cut of a tip has none), any other at the
+            // end of the range on the side of the domain.
             let on_seam = |b: &BPoint| {
                 b.src.is_some_and(|(li, ei, _)| {
                     let edges = face.loops.get(li as usize);
@@ -281,42 +283,64 @@ pub(super) fn close_wrapping_loops(
                     edges.is_some_and(|l| l.iter().filter(|le| Some(le.edge.id) == id).count() >= 2)
                 })
             };
+            // The seam's dead end along `u` (`along_u`) or `v`: its index and coordinate.
+            let seam_end = |along_u: bool| {
+                let along = |b: &BPoint| if along_u { b.uv.x } else { b.uv.y };
+                crate::model::seam::seam_dead_end(lp.iter().map(|b| (along(b), on_seam(b))))
+            };
             let apex = |along_u: bool| {
                 let t0 = if along_u { first.uv.x } else { first.uv.y };
-                let along = |b: &BPoint| if along_u { b.uv.x } else { b.uv.y };
-                let far = lp
-                    .iter()
-                    .filter(|b| on_seam(b))
-                    .map(along)
-                    .max_by(|a, b| (a - t0).abs().total_cmp(&(b - t0).abs()))
-                    .filter(|&t| (t - t0).abs() > 1e-9 * (1.0 + t0.abs()));
-                far.or_else(|| {
-                    singular_range(s, first.uv, along_u).map(|(a, b)| {
-                        if (a - t0).abs() > (b - t0).abs() {
-                            a
-                        } else {
-                            b
-                        }
-                    })
+                singular_range(s, first.uv, along_u).map(|(a, b)| {
+                    if (a - t0).abs() > (b - t0).abs() {
+                        a
+                    } else {
+                        b
+                    }
                 })
             };
+            let far = seam_end(wu == 0);
             let (a, b) = if wu != 0 {
-                let v = match rv {
+                let v = match (far, rv) {
+                    (Some((_, v)), _) => v,
                     // Running +u, the left side is +v.
-                    Some((_, vmax)) if (wu > 0) == face.domain_left => vmax,
-                    Some((vmin, _)) => vmin,
-                    None => apex(false).ok_or(TrimError::UnboundedWrap)?,
+                    (None, Some((_, vmax))) if (wu > 0) == face.domain_left => vmax,
+                    (None, Some((vmin, _))) => vmin,
+                    (None, None) => apex(false).ok_or(TrimError::UnboundedWrap)?,
                 };
                 (DVec2::new(end.x, v), DVec2::new(first.uv.x, v))
             } else {
-                let u = match ru {
+                let u = match (far, ru) {
+                    (Some((_, u)), _) => u,
                     // Running +v, the left side is −u.
-                    Some((umin, _)) if (wv > 0) == face.domain_left => umin,
-                    Some((_, umax)) => umax,
-                    None => apex(true).ok_or(TrimError::UnboundedWrap)?,
+                    (None, Some((umin, _))) if (wv > 0) == face.domain_left => umin,
+                    (None, Some((_, umax))) => umax,
+                    (None, None) => apex(true).ok_or(TrimError::UnboundedWrap)?,
                 };
                 (DVec2::new(u, end.y), DVec2::new(u, first.uv.y))
             };
+            // A loop that comes back down its seam on the side it went up (both uses unwrapped
+            // to one side of the period) ends where it left the seam's far end: that return
+            // leg would lie on the closing line and cross it (gen-45-9's inner cone, once:
+            // inside was then told by centroids, not parity). It is dropped, and the loop is
+            // closed from the far end across the period and down the seam's other side.
+            if let Some((k, _)) = far
+                && k + 1 < lp.len()
+                && lp[k + 1..].iter().all(on_seam)
+                && (if wu != 0 {
+                    pu.map(|p| (0, p))
+                } else {
+                    pv.map(|p| (1, p))
+                })
+                .is_some_and(|(x, p)| (lp[k].uv[x] - end[x]).abs() < 0.25 * p)
+            {
+                lp.truncate(k + 1);
+                lp.push(BPoint {
+                    p: s.point(b),
+                    uv: b,
+                    src: None,
+                });
+                return Ok(());
+            }
             let mut add = |uv: DVec2| {
                 lp.push(BPoint {
                     p: s.point(uv),
