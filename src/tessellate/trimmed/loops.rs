@@ -266,9 +266,10 @@ pub(super) fn close_wrapping_loops(
             // The loop runs from `first` to `first + w·P`; close it on the side of the domain.
             let end =
                 first.uv + DVec2::new(wu as f64 * pu.unwrap_or(0.0), wv as f64 * pv.unwrap_or(0.0));
-            // A loop that runs out along a seam (an edge it uses both ways) away from its
-            // first point, to a vertex where no edge runs round, is closed at the seam's far
-            // end, as Open CASCADE closes its parameter-space wire: generated model gen-4-17,
+            // A loop that runs out along a seam (an edge it uses both ways) to a vertex no
+            // other edge meets (the seam's dead end, beyond every other edge of the loop:
+            // `model::seam`) is closed at that end, as Open CASCADE closes its
+            // parameter-space wire: generated model gen-4-17,
             // a wide cone between a circle of radius 3.5 and a seam to radius 43.2, was drawn
             // as the disc inside the circle and a sliver along the seam; gen-46-47, the offset
             // of a spring's pipe (a NURBS of v range 0..34) between its end circle and a seam
