@@ -174,3 +174,38 @@ fn the_targets_seed_inputs_end_without_a_panic() {
     n += replay_with("trimmed", &[3], &iges_inputs);
     assert!(n >= 30, "only {n} seed inputs found");
 }
+
+/// A fuzzed face whose B-spline edge (one control point moved) zigzags across the wide cone
+/// it bounds: its first attempt builds ~148 000 vertices, 17 000 of them on its border, and
+/// its trim polylines cross. It was tried twice more with its edges followed more closely
+/// (151 744 border segments at the last), and once more to restore the kept attempt: 30 s
+/// for `stats`, past the fuzz target's 10 s. A face that large is tried once.
+#[test]
+fn a_face_already_large_is_not_tried_again_for_crossing_trim_curves() {
+    use patchwork::model::PatchSurface;
+    use patchwork::tessellate::TrimmedTessellator;
+    let path = common::root().join("tests/data/fuzz/trimmed/zigzag_edge_retried_4x");
+    let data = std::fs::read(&path).expect("read input");
+    let model = step::read(&data[1..], &path).expect("the mutated file still reads");
+    let scene =
+        patchwork::prep::step::assemble(model, &patchwork::util::NoProgress).expect("assembles");
+    let face = scene
+        .patches
+        .iter()
+        .find_map(|p| match &p.surface {
+            PatchSurface::Trimmed(f) => Some(f),
+            _ => None,
+        })
+        .expect("the cone face is kept");
+    // As the fuzz target: its first byte (2) asks for 10⁻² of the scene's radius.
+    let eps = 1e-2 * scene.bounds.radius;
+    let mut out = PatchMesh::default();
+    let report = TrimmedTessellator::new()
+        .tessellate(face, eps, &mut out)
+        .expect("tessellates");
+    assert!(
+        report.crossing_constraints > 0,
+        "the input no longer has crossing trim polylines: it tests nothing"
+    );
+    assert_eq!(report.attempts, 1, "{report:?}");
+}

@@ -16,7 +16,7 @@ use super::Sphere;
 use super::nurbs::{FastSurface, NurbsSurface};
 
 mod project;
-pub(crate) use project::CoarseGrid;
+pub(crate) use project::{CoarseGrid, LoopSearch};
 use project::{KEEP_GUESSES, nearest_of_grid};
 
 pub(crate) fn to_dvec(p: Point3) -> DVec3 {

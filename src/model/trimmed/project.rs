@@ -76,6 +76,26 @@ impl CoarseGrid {
     }
 }
 
+/// What a walk along a face's loops ([`TrimmedFace::project_along`]) carries from one point to
+/// the next: whether it may still pay for a fine search, and the face's coarse grid, evaluated
+/// at the first search without a hint. A hinted search needs no grid; a fuzzed face whose edge
+/// lies 10¹⁴ off it (`tests/data/fuzz/trimmed/edge_far_off_cone`) searched without one at each
+/// of its points, and evaluated the grid anew each time (40 % of its load).
+pub(crate) struct LoopSearch {
+    /// Whether a fine search may still run (see [`TrimmedFace::project_along`]).
+    pub(crate) fine_left: bool,
+    grid: std::cell::OnceCell<CoarseGrid>,
+}
+
+impl LoopSearch {
+    pub(crate) fn new() -> Self {
+        LoopSearch {
+            fine_left: true,
+            grid: std::cell::OnceCell::new(),
+        }
+    }
+}
+
 impl TrimmedFace {
     /// As [`SurfaceEval::project`], the coarse search (without a hint) through `grid` when
     /// given: the face's own [`TrimmedFace::coarse_grid`], whose points are this search's
@@ -229,14 +249,18 @@ impl TrimmedFace {
     /// mislead the local search), and on a fine grid ([`TrimmedFace::project_on`]) while
     /// `fine_left`: the first fine search that still ends farther than `far` (an edge off its
     /// surface) clears it, so such a loop pays for one.
+    /// `search` carries `fine_left` and the face's coarse grid from one point to the next.
     pub(crate) fn project_along(
         &self,
         p: DVec3,
         hint: Option<DVec2>,
         far: f64,
-        fine_left: &mut bool,
+        search: &mut LoopSearch,
     ) -> Option<DVec2> {
-        self.project_along_in(p, hint, far, fine_left, None)
+        let LoopSearch { fine_left, grid } = search;
+        self.project_along_with(p, hint, far, fine_left, || {
+            Some(grid.get_or_init(|| self.coarse_grid()))
+        })
     }
 
     /// As [`TrimmedFace::project_along`], coarse searches through `grid` when given (the
@@ -249,19 +273,32 @@ impl TrimmedFace {
         fine_left: &mut bool,
         grid: Option<&CoarseGrid>,
     ) -> Option<DVec2> {
+        self.project_along_with(p, hint, far, fine_left, || grid)
+    }
+
+    /// The search of [`TrimmedFace::project_along`], the coarse grid asked of `grid` only by
+    /// a search without a hint.
+    fn project_along_with<'g>(
+        &self,
+        p: DVec3,
+        hint: Option<DVec2>,
+        far: f64,
+        fine_left: &mut bool,
+        grid: impl Fn() -> Option<&'g CoarseGrid>,
+    ) -> Option<DVec2> {
         let off = |uv: DVec2| self.point(uv).distance(p);
-        let uv = self.project_in(p, hint, grid);
+        let uv = self.project_in(p, hint, if hint.is_some() { None } else { grid() });
         if uv.is_some_and(|uv| off(uv) <= far) {
             return uv;
         }
         let g = if *fine_left {
-            let (g, fine) = self.project_on(p, None, far, grid);
+            let (g, fine) = self.project_on(p, None, far, grid());
             if fine && g.is_none_or(|g| off(g) > far) {
                 *fine_left = false;
             }
             g
         } else {
-            self.project_in(p, None, grid)
+            self.project_in(p, None, grid())
         };
         match (uv, g) {
             (Some(a), Some(b)) if off(a) <= off(b) => Some(a),

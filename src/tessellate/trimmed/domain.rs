@@ -9,6 +9,26 @@ use spade::Triangulation;
 use super::Cdt;
 use crate::model::trimmed::SurfaceEval;
 
+/// Per triangle (its vertex indices from the least, orientation kept: [`memo_key`]), what an
+/// earlier refinement round found of it. A round changes the triangulation only round the
+/// points it inserts; the other triangles need no second test (a fuzzed face,
+/// `tests/data/fuzz/trimmed/zigzag_edge_retried_4x`, had each of its 280 000 triangles tested
+/// against its 17 000 border segments and sampled again every round). Each round keeps the
+/// entries of its own triangles only.
+pub(super) type Memo<T> = crate::util::IntMap<[u32; 3], T>;
+
+/// The key of triangle `t` in a [`Memo`], and the rotation `r` it took: `key[k] = t[(r + k) % 3]`.
+pub(super) fn memo_key(t: [u32; 3]) -> ([u32; 3], usize) {
+    let r = if t[0] <= t[1] && t[0] <= t[2] {
+        0
+    } else if t[1] <= t[2] {
+        1
+    } else {
+        2
+    };
+    ([t[r], t[(r + 1) % 3], t[(r + 2) % 3]], r)
+}
+
 /// A triangle whose parameter-space area is below this fraction of its longest side squared
 /// (scaled space) has no inside to test: see [`inside_faces`].
 const SLIVER: f64 = 1e-9;
@@ -81,7 +101,9 @@ impl<'a> Domain<'a> {
 /// whose surface point is nearer is tested. (Tested at the centroid itself, the slivers of
 /// generated model gen-45-9's inner cone along its small circle read as inside: triangles
 /// over the hole, 1.97 ε off the face at 3e-3 of its radius, and refinement, which cannot
-/// insert a point inside them, stopped at its rounds.)
+/// insert a point inside them, stopped at its rounds.) `memo` keeps what the centroid tests
+/// found, for the next round ([`Memo`]).
+#[allow(clippy::too_many_arguments)]
 pub(super) fn inside_faces(
     cdt: &Cdt,
     uvs: &[DVec2],
@@ -90,6 +112,7 @@ pub(super) fn inside_faces(
     use_parity: bool,
     s: &impl SurfaceEval,
     scale: DVec2,
+    memo: &mut Memo<bool>,
 ) -> Vec<[u32; 3]> {
     let tri_of = |f: spade::handles::FaceHandle<'_, spade::handles::InnerTag, _, _, _, _>| {
         let v = f.vertices();
@@ -125,11 +148,17 @@ pub(super) fn inside_faces(
             };
             domain.contains(side)
         };
-        return cdt
-            .inner_faces()
-            .map(tri_of)
-            .filter(|&t| inside(t))
-            .collect();
+        let mut earlier = std::mem::take(memo);
+        let mut out = Vec::new();
+        for t in cdt.inner_faces().map(tri_of) {
+            let key = memo_key(t).0;
+            let is_in = earlier.remove(&key).unwrap_or_else(|| inside(t));
+            memo.insert(key, is_in);
+            if is_in {
+                out.push(t);
+            }
+        }
+        return out;
     }
     // Flood fill from the hull: parity flips across every constraint edge.
     let n = cdt.num_all_faces();

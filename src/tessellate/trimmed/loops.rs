@@ -597,7 +597,7 @@ impl TrimmedTessellator {
         li: usize,
         lp: &[LoopEdge],
         tol: f64,
-        fine_left: &mut bool,
+        search: &mut LoopSearch,
         report: &mut TrimReport,
     ) -> Result<Vec<BPoint>, TrimError> {
         let s = face;
@@ -653,7 +653,7 @@ impl TrimmedTessellator {
                     None if known.is_some() => None,
                     None if ordered.len() >= 2 => {
                         let q = e.point(0.5 * (ordered[0] + ordered[1]));
-                        s.project_along(q, None, far, fine_left)
+                        s.project_along(q, None, far, search)
                     }
                     None => None,
                 };
@@ -663,14 +663,14 @@ impl TrimmedTessellator {
                 // three turns and half the face was drawn outside its trim).
                 let uv = match known {
                     Some(uv) => Some(uv),
-                    None => s.project_along(p, hint, far, fine_left),
+                    None => s.project_along(p, hint, far, search),
                 };
                 let Some(mut uv) = uv else {
                     return Err(TrimError::Projection { edge: e.id });
                 };
                 if let Some(t0) = t_before {
                     let src = (li as u32, k as u32);
-                    bridge(s, e, src, (t0, t), uv, 0, far, fine_left, &mut pts);
+                    bridge(s, e, src, (t0, t), uv, 0, far, search, &mut pts);
                 }
                 if let Some(prev) = pts.last() {
                     uv = unwrap_near(uv, prev.uv, pu, pv);

@@ -44,7 +44,7 @@ use super::{PatchMesh, Resolution, Stop};
 use crate::model::edges::{EdgeKind, EdgeNormals, SAMPLES};
 use crate::model::poles::{LoopPoint, expand_poles};
 use crate::model::trimmed::{
-    Interval, LoopEdge, SurfaceEval, TrimmedFace, TruckSurface, parameter_bounds,
+    Interval, LoopEdge, LoopSearch, SurfaceEval, TrimmedFace, TruckSurface, parameter_bounds,
 };
 
 mod domain;
@@ -62,6 +62,13 @@ const MAX_GRID: usize = 400;
 /// Times a face whose trim polylines cross is tessellated again with them closer to its
 /// edges (see [`TrimmedTessellator::tessellate_with`]).
 const BORDER_RETRIES: usize = 2;
+/// Vertices the attempts at a face may have built for it to be tried again for crossing trim
+/// polylines: a retry follows every edge ~2× more closely and costs what the attempt did
+/// again. The retries fix narrow peninsulas of ordinary faces (the corpus's retried faces
+/// have at most 234 vertices); a fuzzed face whose B-spline edge zigzags across the cone it
+/// bounds (`tests/data/fuzz/trimmed/zigzag_edge_retried_4x`) built 148 000 vertices at its
+/// first attempt, 17 000 on its border, and its retries took it past the fuzz target's 10 s.
+const RETRY_VERTICES: usize = 50_000;
 /// Rounds of error-driven refinement.
 const REFINE_ROUNDS: usize = 10;
 /// Triangles are refined down to this fraction of ε: 7 samples find a triangle's largest
@@ -159,6 +166,10 @@ pub struct TrimReport {
     /// edges 0.57 mm off a plane: generated model 1-32). No mesh through those points can be
     /// nearer the surface; the error refinement works to is what the mesh adds to it.
     pub edge_offset: f64,
+    /// Attempts at the face this tessellation made: one, and one more per retry for crossing
+    /// trim polylines (see [`TrimmedTessellator::tessellate`]; the kept one is repeated
+    /// when it was not the last).
+    pub attempts: usize,
 }
 
 impl TrimmedTessellator {
@@ -202,21 +213,30 @@ impl TrimmedTessellator {
         };
         let mut border_tol = 0.5 * eps;
         let mut result = self.attempt(face, eps, border_tol, shared_borders, out);
+        let mut attempts = 1;
+        let mut built = self.uvs.len();
         // Trim polylines that cross (a peninsula of a face narrower than ε) leave spade's
         // constraints out and the parity fill off; the face is tessellated again with its
         // edges followed more closely (`BORDER_RETRIES` times, a quarter of the tolerance
         // each), the attempt with the fewest crossings kept. As many crossings do not end the
         // retries: a crescent's corner 0.038 ε inside its arc (gen-36-31 at 5 %, face #1055)
-        // still crossed at ε/8, clear at ε/32. Not with shared borders (the neighbour's too).
+        // still crossed at ε/8, clear at ε/32. Not with shared borders (the neighbour's too),
+        // nor once the attempts have built `RETRY_VERTICES`.
         let mut best = border_tol;
         for _ in 0..BORDER_RETRIES {
             let crossings = match &result {
                 Ok(r) if r.crossing_constraints > 0 && !shared_borders => r.crossing_constraints,
                 _ => break,
             };
+            if built >= RETRY_VERTICES {
+                break;
+            }
             border_tol *= 0.25;
             let mut trial = PatchMesh::default();
-            match self.attempt(face, eps, border_tol, shared_borders, &mut trial) {
+            let tried = self.attempt(face, eps, border_tol, shared_borders, &mut trial);
+            attempts += 1;
+            built += self.uvs.len();
+            match tried {
                 Ok(r) if r.crossing_constraints < crossings => {
                     std::mem::swap(out, &mut trial);
                     result = Ok(r);
@@ -230,8 +250,9 @@ impl TrimmedTessellator {
             // The last attempt was not kept: the tessellator's state (`loops`, `starts`) is
             // the kept one's again.
             result = self.attempt(face, eps, best, shared_borders, out);
+            attempts += 1;
         }
-        result
+        result.map(|r| TrimReport { attempts, ..r })
     }
 
     /// One tessellation of `face` at `eps` (already checked), its trim polylines and border
@@ -262,9 +283,9 @@ impl TrimmedTessellator {
         self.loops.clear();
         self.starts.clear();
         self.starts.resize(face.loops.len(), None);
-        let mut fine_left = true;
+        let mut search = LoopSearch::new();
         for (li, lp) in face.loops.iter().enumerate() {
-            let pts = self.loop_points(face, li, lp, border_tol, &mut fine_left, &mut report)?;
+            let pts = self.loop_points(face, li, lp, border_tol, &mut search, &mut report)?;
             if pts.len() >= 2 {
                 self.loops.push(pts);
             }
@@ -360,14 +381,33 @@ impl TrimmedTessellator {
         // The face's work budget, from its size against ε (set after the first round, when
         // its area is known): see [`vertex_budget`]. The measured error then tells the truth.
         let mut vertex_cap = MAX_VERTICES;
+        // What earlier rounds found of the triangles still there (`domain::Memo`): whether
+        // each is inside, and its error with its edges' (in key order).
+        let mut inside_memo = domain::Memo::default();
+        let mut error_memo: domain::Memo<(f64, [f64; 3])> = domain::Memo::default();
         for round in 0..=REFINE_ROUNDS {
             tris.clear();
-            let inside_faces =
-                domain::inside_faces(&cdt, &self.uvs, &self.pos, &domain, use_parity, s, scale);
+            let inside_faces = domain::inside_faces(
+                &cdt,
+                &self.uvs,
+                &self.pos,
+                &domain,
+                use_parity,
+                s,
+                scale,
+                &mut inside_memo,
+            );
             let mut worst = 0.0f64;
             let mut to_insert = Vec::new();
+            let mut earlier = std::mem::take(&mut error_memo);
             for t in inside_faces {
-                let (e, chord_off) = self.triangle_error(s, t);
+                let (key, r) = domain::memo_key(t);
+                let (e, by_key) = earlier.remove(&key).unwrap_or_else(|| {
+                    let (e, off) = self.triangle_error(s, t);
+                    (e, [0, 1, 2].map(|k| off[(r + k) % 3]))
+                });
+                error_memo.insert(key, (e, by_key));
+                let chord_off = [0, 1, 2].map(|j| by_key[(j + 3 - r) % 3]);
                 worst = worst.max(e);
                 if e > REFINE_TARGET * eps || self.wraps(&cdt, t, chord_off, eps) {
                     let c = (self.uvs[t[0] as usize]

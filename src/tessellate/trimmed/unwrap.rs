@@ -51,7 +51,7 @@ pub(super) fn bridge(
     raw1: DVec2,
     depth: u32,
     far: f64,
-    fine_left: &mut bool,
+    search: &mut LoopSearch,
     pts: &mut Vec<BPoint>,
 ) {
     let (pu, pv) = face.periods();
@@ -74,7 +74,7 @@ pub(super) fn bridge(
     }
     let tm = 0.5 * (t0 + t1);
     let pm = e.point(tm);
-    let Some(raw_m) = face.project_along(pm, Some(uv0), far, fine_left) else {
+    let Some(raw_m) = face.project_along(pm, Some(uv0), far, search) else {
         return;
     };
     let mid = unwrap_near(raw_m, uv0, pu, pv);
@@ -83,22 +83,12 @@ pub(super) fn bridge(
     if same(via_mid.x, direct.x, pu) && same(via_mid.y, direct.y, pv) {
         return;
     }
-    bridge(
-        face,
-        e,
-        src,
-        (t0, tm),
-        raw_m,
-        depth + 1,
-        far,
-        fine_left,
-        pts,
-    );
+    bridge(face, e, src, (t0, tm), raw_m, depth + 1, far, search, pts);
     let uv = unwrap_near(raw_m, pts.last().map_or(uv0, |b| b.uv), pu, pv);
     pts.push(BPoint {
         p: pm,
         uv,
         src: Some((src.0, src.1, tm)),
     });
-    bridge(face, e, src, (tm, t1), raw1, depth + 1, far, fine_left, pts);
+    bridge(face, e, src, (tm, t1), raw1, depth + 1, far, search, pts);
 }
