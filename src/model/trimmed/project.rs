@@ -78,20 +78,22 @@ impl CoarseGrid {
 
 /// What a walk along a face's loops ([`TrimmedFace::project_along`]) carries from one point to
 /// the next: whether it may still pay for a fine search, and the face's coarse grid, evaluated
-/// at the first search without a hint. A hinted search needs no grid; a fuzzed face whose edge
-/// lies 10¹⁴ off it (`tests/data/fuzz/trimmed/edge_far_off_cone`) searched without one at each
-/// of its points, and evaluated the grid anew each time (40 % of its load).
+/// at the first search that needs it (none without a hint, or a hinted one that landed far).
+/// A hinted search that lands near needs no grid; a fuzzed face whose edge lies 10¹⁴ off it
+/// (`tests/data/fuzz/trimmed/edge_far_off_cone`) searched without a hint at each of its points,
+/// and evaluated the grid anew each time (40 % of its load). Plain fields, no cell: the walk
+/// owns it (`model` holds no interior mutability: `tests/architecture.rs`).
 pub(crate) struct LoopSearch {
     /// Whether a fine search may still run (see [`TrimmedFace::project_along`]).
     pub(crate) fine_left: bool,
-    grid: std::cell::OnceCell<CoarseGrid>,
+    grid: Option<CoarseGrid>,
 }
 
 impl LoopSearch {
     pub(crate) fn new() -> Self {
         LoopSearch {
             fine_left: true,
-            grid: std::cell::OnceCell::new(),
+            grid: None,
         }
     }
 }
@@ -257,10 +259,15 @@ impl TrimmedFace {
         far: f64,
         search: &mut LoopSearch,
     ) -> Option<DVec2> {
-        let LoopSearch { fine_left, grid } = search;
-        self.project_along_with(p, hint, far, fine_left, || {
-            Some(grid.get_or_init(|| self.coarse_grid()))
-        })
+        // The hinted search needs no grid: its result, when near, is the whole answer.
+        if hint.is_some() {
+            let uv = self.project_in(p, hint, None);
+            if uv.is_some_and(|uv| self.point(uv).distance(p) <= far) {
+                return uv;
+            }
+        }
+        let grid = search.grid.get_or_insert_with(|| self.coarse_grid());
+        self.project_along_in(p, hint, far, &mut search.fine_left, Some(grid))
     }
 
     /// As [`TrimmedFace::project_along`], coarse searches through `grid` when given (the
@@ -273,32 +280,19 @@ impl TrimmedFace {
         fine_left: &mut bool,
         grid: Option<&CoarseGrid>,
     ) -> Option<DVec2> {
-        self.project_along_with(p, hint, far, fine_left, || grid)
-    }
-
-    /// The search of [`TrimmedFace::project_along`], the coarse grid asked of `grid` only by
-    /// a search without a hint.
-    fn project_along_with<'g>(
-        &self,
-        p: DVec3,
-        hint: Option<DVec2>,
-        far: f64,
-        fine_left: &mut bool,
-        grid: impl Fn() -> Option<&'g CoarseGrid>,
-    ) -> Option<DVec2> {
         let off = |uv: DVec2| self.point(uv).distance(p);
-        let uv = self.project_in(p, hint, if hint.is_some() { None } else { grid() });
+        let uv = self.project_in(p, hint, grid);
         if uv.is_some_and(|uv| off(uv) <= far) {
             return uv;
         }
         let g = if *fine_left {
-            let (g, fine) = self.project_on(p, None, far, grid());
+            let (g, fine) = self.project_on(p, None, far, grid);
             if fine && g.is_none_or(|g| off(g) > far) {
                 *fine_left = false;
             }
             g
         } else {
-            self.project_in(p, None, grid())
+            self.project_in(p, None, grid)
         };
         match (uv, g) {
             (Some(a), Some(b)) if off(a) <= off(b) => Some(a),
