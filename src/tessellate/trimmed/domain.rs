@@ -29,6 +29,17 @@ pub(super) fn memo_key(t: [u32; 3]) -> ([u32; 3], usize) {
     ([t[r], t[(r + 1) % 3], t[(r + 2) % 3]], r)
 }
 
+/// Per-edge values of a triangle `t` (edge `j` from `t[j]` to `t[j + 1]`) in the order of its
+/// [`memo_key`] of rotation `r`.
+pub(super) fn edges_to_key<T: Copy>(by_t: [T; 3], r: usize) -> [T; 3] {
+    [0, 1, 2].map(|k| by_t[(r + k) % 3])
+}
+
+/// The inverse of [`edges_to_key`]: per-edge values in key order back in `t`'s.
+pub(super) fn edges_from_key<T: Copy>(by_key: [T; 3], r: usize) -> [T; 3] {
+    [0, 1, 2].map(|j| by_key[(j + 3 - r) % 3])
+}
+
 /// A triangle whose parameter-space area is below this fraction of its longest side squared
 /// (scaled space) has no inside to test: see [`inside_faces`].
 const SLIVER: f64 = 1e-9;
@@ -208,6 +219,40 @@ mod tests {
             }
         }
         c
+    }
+
+    /// A triangle seen in any rotation has one key, and its per-edge values (memoized in key
+    /// order) come back on the same vertex pairs. Seen failing with the inverse rotation
+    /// taken the wrong way (`(j + r) % 3`).
+    #[test]
+    fn memo_keys_and_edge_values_agree_across_rotations() {
+        let t = [7u32, 3, 9];
+        let rotations = [[7, 3, 9], [3, 9, 7], [9, 7, 3]];
+        let edge = |t: [u32; 3], j: usize| (t[j], t[(j + 1) % 3]);
+        let key0 = memo_key(t).0;
+        assert_eq!(key0, [3, 9, 7]);
+        for rot in rotations {
+            let (key, r) = memo_key(rot);
+            assert_eq!(key, key0, "{rot:?}");
+            assert_eq!(
+                [0, 1, 2].map(|k| key[k]),
+                [0, 1, 2].map(|k| rot[(r + k) % 3])
+            );
+            // Each edge's value is its own vertex pair: stored from this rotation, read back
+            // in another, every edge keeps its pair.
+            let by_key = edges_to_key([0, 1, 2].map(|j| edge(rot, j)), r);
+            for other in rotations {
+                let (_, r2) = memo_key(other);
+                let back = edges_from_key(by_key, r2);
+                assert_eq!(
+                    back,
+                    [0, 1, 2].map(|j| edge(other, j)),
+                    "{rot:?} → {other:?}"
+                );
+            }
+        }
+        // The other orientation is another triangle.
+        assert_ne!(memo_key([7, 9, 3]).0, key0);
     }
 
     #[test]

@@ -404,10 +404,10 @@ impl TrimmedTessellator {
                 let (key, r) = domain::memo_key(t);
                 let (e, by_key) = earlier.remove(&key).unwrap_or_else(|| {
                     let (e, off) = self.triangle_error(s, t);
-                    (e, [0, 1, 2].map(|k| off[(r + k) % 3]))
+                    (e, domain::edges_to_key(off, r))
                 });
                 error_memo.insert(key, (e, by_key));
-                let chord_off = [0, 1, 2].map(|j| by_key[(j + 3 - r) % 3]);
+                let chord_off = domain::edges_from_key(by_key, r);
                 worst = worst.max(e);
                 if e > REFINE_TARGET * eps || self.wraps(&cdt, t, chord_off, eps) {
                     let c = (self.uvs[t[0] as usize]
