@@ -259,15 +259,20 @@ impl TrimmedFace {
         far: f64,
         search: &mut LoopSearch,
     ) -> Option<DVec2> {
-        // The hinted search needs no grid: its result, when near, is the whole answer.
-        if hint.is_some() {
-            let uv = self.project_in(p, hint, None);
-            if uv.is_some_and(|uv| self.point(uv).distance(p) <= far) {
-                return uv;
-            }
+        fn grid<'g>(g: &'g mut Option<CoarseGrid>, face: &TrimmedFace) -> &'g CoarseGrid {
+            g.get_or_insert_with(|| face.coarse_grid())
         }
-        let grid = search.grid.get_or_insert_with(|| self.coarse_grid());
-        self.project_along_in(p, hint, far, &mut search.fine_left, Some(grid))
+        // A hinted search needs no grid (`project_in` starts from the hint alone); its result,
+        // when near, is the whole answer, and no grid is evaluated.
+        let uv = match hint {
+            Some(_) => self.project_in(p, hint, None),
+            None => self.project_in(p, None, Some(grid(&mut search.grid, self))),
+        };
+        if uv.is_some_and(|uv| self.point(uv).distance(p) <= far) {
+            return uv;
+        }
+        let g = grid(&mut search.grid, self);
+        self.project_along_from(p, uv, far, &mut search.fine_left, Some(g))
     }
 
     /// As [`TrimmedFace::project_along`], coarse searches through `grid` when given (the
@@ -280,8 +285,21 @@ impl TrimmedFace {
         fine_left: &mut bool,
         grid: Option<&CoarseGrid>,
     ) -> Option<DVec2> {
-        let off = |uv: DVec2| self.point(uv).distance(p);
         let uv = self.project_in(p, hint, grid);
+        self.project_along_from(p, uv, far, fine_left, grid)
+    }
+
+    /// The rest of [`TrimmedFace::project_along_in`] once its first search found `uv`: that,
+    /// when it lies within `far`, else the searches without a hint.
+    fn project_along_from(
+        &self,
+        p: DVec3,
+        uv: Option<DVec2>,
+        far: f64,
+        fine_left: &mut bool,
+        grid: Option<&CoarseGrid>,
+    ) -> Option<DVec2> {
+        let off = |uv: DVec2| self.point(uv).distance(p);
         if uv.is_some_and(|uv| off(uv) <= far) {
             return uv;
         }

@@ -65,9 +65,10 @@ const BORDER_RETRIES: usize = 2;
 /// Vertices the attempts at a face may have built for it to be tried again for crossing trim
 /// polylines: a retry follows every edge ~2× more closely and costs what the attempt did
 /// again. The retries fix narrow peninsulas of ordinary faces (the repository's retried
-/// faces have at most 2 033 vertices, the corpus's 234); a fuzzed face whose B-spline edge zigzags across the cone it
-/// bounds (`tests/data/fuzz/trimmed/zigzag_edge_retried_4x`) built 148 000 vertices at its
-/// first attempt, 17 000 on its border, and its retries took it past the fuzz target's 10 s.
+/// faces have at most 2 033 vertices, the corpus's 234); a fuzzed face whose B-spline edge
+/// zigzags across the cone it bounds (`tests/data/fuzz/trimmed/zigzag_edge_retried_4x`)
+/// built 148 000 vertices at its first attempt, 17 000 on its border, and its retries took
+/// it past the fuzz target's 10 s.
 const RETRY_VERTICES: usize = 50_000;
 /// Rounds of error-driven refinement.
 const REFINE_ROUNDS: usize = 10;
